@@ -1,0 +1,26 @@
+//! The VLF visibility-field file format, version 1 (`formats/vlf.md` is the contract).
+//!
+//! This crate knows bytes and invariants, not ray tracing:
+//! - [`layout`]: the on-disk structs, `#[repr(C)]` and `Pod`, sizes asserted at compile time;
+//! - [`reader`]: a zero-copy reader that validates the header and section table in time
+//!   independent of the file size and hands out typed slices;
+//! - [`writer`]: a writer that lays every section out before writing and streams big sections
+//!   from spill files;
+//! - [`verify`]: the full verification behind `vlf-bake dump --verify`.
+//!
+//! Errors are values ([`FormatError`]), never panics, whatever the input bytes.
+
+#[cfg(target_endian = "big")]
+compile_error!("vlf-format supports little-endian targets only: the file format is little-endian and is cast in place");
+
+pub mod error;
+pub mod layout;
+pub mod reader;
+pub mod verify;
+pub mod writer;
+
+pub use error::{FormatError, hex};
+pub use layout::*;
+pub use reader::{FieldReader, content_hash, read_header_and_table};
+pub use verify::{VerifyReport, recount_statistics, verify};
+pub use writer::{HashingWriter, Payload, SectionPayload, write_field};

@@ -1,0 +1,322 @@
+//! The zero-copy reader: validates the header and section table once (time independent of the
+//! file size) and hands out typed slices that borrow the file bytes.
+
+use crate::error::{FormatError, hex};
+use crate::layout::*;
+use bytemuck::Pod;
+
+/// A validated field: typed views of every section, borrowed from the file bytes.
+///
+/// Construction checks the structure of §7 of `formats/vlf.md` and nothing that depends on the
+/// size of the payload. Values *inside* the payload (offsets, ids) are not checked here: use them
+/// with bounds-checked access, or run [`crate::verify::verify`] once.
+#[derive(Clone, Copy, Debug)]
+pub struct FieldReader<'a> {
+    pub bytes: &'a [u8],
+    pub header: &'a Header,
+    pub table: &'a [SectionEntry],
+    pub scene: &'a SceneRecord,
+    pub params: &'a ParamsRecord,
+    pub statistics: &'a StatisticsRecord,
+    pub directions: &'a [[f32; 4]],
+    pub rotations: &'a [[f64; 9]],
+    pub lookup: &'a [u32],
+    pub beams: &'a [BeamRecord],
+    pub tiles: &'a [TileRecord],
+    pub leaf_bounds: &'a [u32],
+    pub triangle_ids: &'a [u32],
+    pub triangles: &'a [TriangleRecord],
+    pub provenance: &'a [ProvenanceRecord],
+    pub sources: &'a [SourceRecord],
+    pub inputs: &'a [InputRecord],
+    pub strings: &'a [u8],
+}
+
+/// The header and table checks of §7, without casting any section. Used by [`FieldReader::new`]
+/// and by tools that must describe a file whose sections cannot be cast (a packed field).
+pub fn read_header_and_table(bytes: &[u8]) -> Result<(&Header, &[SectionEntry]), FormatError> {
+    let len = bytes.len() as u64;
+    if bytes.len() < HEADER_SIZE {
+        return Err(FormatError::TooShort { actual: len, needed: HEADER_SIZE as u64 });
+    }
+    let header: Header = bytemuck::pod_read_unaligned(&bytes[..HEADER_SIZE]);
+    if header.magic != MAGIC {
+        return Err(FormatError::BadMagic { found: header.magic, hint: magic_hint(&header.magic) });
+    }
+    if header.version_major != VERSION_MAJOR {
+        return Err(FormatError::UnsupportedVersion {
+            major: header.version_major,
+            minor: header.version_minor,
+            supported: VERSION_MAJOR,
+        });
+    }
+    check_field("header_size", header.header_size as u64, HEADER_SIZE as u64)?;
+    check_field("table_offset", header.table_offset, HEADER_SIZE as u64)?;
+    check_field("table_entry_size", header.table_entry_size as u64, TABLE_ENTRY_SIZE as u64)?;
+    if header.flags != 0 {
+        return Err(FormatError::ReservedNotZero { field: "flags" });
+    }
+    if header.reserved0 != 0 {
+        return Err(FormatError::ReservedNotZero { field: "reserved0" });
+    }
+    if header.reserved1 != [0; 16] {
+        return Err(FormatError::ReservedNotZero { field: "reserved1" });
+    }
+    if header.file_length != len {
+        let what = if len < header.file_length {
+            "the file is truncated"
+        } else {
+            "the file has bytes appended"
+        };
+        return Err(FormatError::LengthMismatch { actual: len, expected: header.file_length, what });
+    }
+    if header.section_count > MAX_SECTIONS {
+        return Err(FormatError::TooManySections { count: header.section_count, limit: MAX_SECTIONS });
+    }
+    let table_end = HEADER_SIZE as u64 + header.section_count as u64 * TABLE_ENTRY_SIZE as u64;
+    if table_end > len {
+        return Err(FormatError::TableOutOfBounds {
+            count: header.section_count,
+            end: table_end,
+            file_length: len,
+        });
+    }
+    let computed = content_hash(&bytes[..table_end as usize]);
+    if computed != header.content_hash {
+        return Err(FormatError::ContentHashMismatch {
+            stored: hex(&header.content_hash),
+            computed: hex(&computed),
+        });
+    }
+    // The header is 8-aligned in any buffer the caller could cast sections from; for the table we
+    // fall back to an error rather than copying, as for sections.
+    let table: &[SectionEntry] = cast_slice(&bytes[HEADER_SIZE..table_end as usize], "section table")?;
+    let header: &Header = &cast_slice::<Header>(&bytes[..HEADER_SIZE], "header")?[0];
+
+    let mut prev_end = table_end;
+    for (index, e) in table.iter().enumerate() {
+        let bad = |problem: String| FormatError::BadSection { index, kind: kind_name(e.kind), problem };
+        if e.codec != codec::RAW && e.codec != codec::ZSTD {
+            return Err(bad(format!("unknown codec {}", e.codec)));
+        }
+        if e.reserved != 0 {
+            return Err(bad("reserved field is not zero".into()));
+        }
+        if e.offset % SECTION_ALIGN != 0 {
+            return Err(bad(format!("offset {} is not a multiple of {SECTION_ALIGN}", e.offset)));
+        }
+        if e.offset < prev_end {
+            return Err(bad(format!(
+                "offset {} overlaps the table or the previous section (which ends at {prev_end}); entries must be sorted by offset",
+                e.offset
+            )));
+        }
+        let end = e.offset.checked_add(e.stored_length).filter(|&end| end <= len).ok_or_else(|| {
+            bad(format!(
+                "stored bytes {}..{} run past the end of the file ({len} bytes)",
+                e.offset,
+                e.offset as u128 + e.stored_length as u128
+            ))
+        })?;
+        if e.codec == codec::RAW && e.raw_length != e.stored_length {
+            return Err(bad(format!(
+                "raw section has raw_length {} but stored_length {}",
+                e.raw_length, e.stored_length
+            )));
+        }
+        if e.element_size == 0 || e.raw_length % e.element_size as u64 != 0 {
+            return Err(bad(format!(
+                "raw_length {} is not a multiple of element_size {}",
+                e.raw_length, e.element_size
+            )));
+        }
+        if let Some(kind) = SectionKind::from_u32(e.kind) {
+            if e.element_size != kind.element_size() {
+                return Err(bad(format!(
+                    "element_size is {}, the spec says {}",
+                    e.element_size,
+                    kind.element_size()
+                )));
+            }
+        }
+        if let Some(first) = table[..index].iter().position(|p| p.kind == e.kind) {
+            return Err(FormatError::DuplicateSection { kind: kind_name(e.kind), first, second: index });
+        }
+        prev_end = end;
+    }
+    if prev_end != len {
+        return Err(FormatError::LengthMismatch {
+            actual: len,
+            expected: prev_end,
+            what: "the file does not end where its last section ends",
+        });
+    }
+    Ok((header, table))
+}
+
+impl<'a> FieldReader<'a> {
+    /// Validates the structure of `bytes` as a field (§7) and casts every section in place.
+    ///
+    /// `bytes` must be 8-byte aligned (a memory map or a `Vec<u64>`-backed buffer is); otherwise
+    /// [`FormatError::Misaligned`] names the section that could not be cast.
+    pub fn new(bytes: &'a [u8]) -> Result<Self, FormatError> {
+        let (header, table) = read_header_and_table(bytes)?;
+        let raw = |kind: SectionKind| -> Result<&'a [u8], FormatError> {
+            let e = table
+                .iter()
+                .find(|e| e.kind == kind as u32)
+                .ok_or(FormatError::MissingSection { kind: kind.name() })?;
+            if e.codec != codec::RAW {
+                return Err(FormatError::CompressedSection { kind: kind.name(), codec: e.codec });
+            }
+            Ok(&bytes[e.offset as usize..(e.offset + e.stored_length) as usize])
+        };
+        fn typed<'b, T: Pod>(bytes: &'b [u8], kind: SectionKind) -> Result<&'b [T], FormatError> {
+            cast_slice(bytes, kind.name())
+        }
+        fn one<'b, T: Pod>(bytes: &'b [u8], kind: SectionKind) -> Result<&'b T, FormatError> {
+            let s: &[T] = typed(bytes, kind)?;
+            expect_count(kind, s.len() as u64, 1)?;
+            Ok(&s[0])
+        }
+
+        let scene: &SceneRecord = one(raw(SectionKind::Scene)?, SectionKind::Scene)?;
+        let params: &ParamsRecord = one(raw(SectionKind::Params)?, SectionKind::Params)?;
+        let statistics: &StatisticsRecord = one(raw(SectionKind::Statistics)?, SectionKind::Statistics)?;
+        check_scene_and_params(scene, params)?;
+
+        let l = params.direction_count as u64;
+        let n = params.tile_resolution as u64;
+        let lattice_side = 2 * params.lattice_n as u64 + 1;
+        let reader = FieldReader {
+            bytes,
+            header,
+            table,
+            scene,
+            params,
+            statistics,
+            directions: typed(raw(SectionKind::Directions)?, SectionKind::Directions)?,
+            rotations: typed(raw(SectionKind::Rotations)?, SectionKind::Rotations)?,
+            lookup: typed(raw(SectionKind::Lookup)?, SectionKind::Lookup)?,
+            beams: typed(raw(SectionKind::Beams)?, SectionKind::Beams)?,
+            tiles: typed(raw(SectionKind::Tiles)?, SectionKind::Tiles)?,
+            leaf_bounds: typed(raw(SectionKind::LeafBounds)?, SectionKind::LeafBounds)?,
+            triangle_ids: typed(raw(SectionKind::TriangleIds)?, SectionKind::TriangleIds)?,
+            triangles: typed(raw(SectionKind::Triangles)?, SectionKind::Triangles)?,
+            provenance: typed(raw(SectionKind::Provenance)?, SectionKind::Provenance)?,
+            sources: typed(raw(SectionKind::Sources)?, SectionKind::Sources)?,
+            inputs: typed(raw(SectionKind::Inputs)?, SectionKind::Inputs)?,
+            strings: raw(SectionKind::Strings)?,
+        };
+        expect_count(SectionKind::Directions, reader.directions.len() as u64, l)?;
+        expect_count(SectionKind::Rotations, reader.rotations.len() as u64, l)?;
+        expect_count(SectionKind::Beams, reader.beams.len() as u64, l)?;
+        expect_count(SectionKind::Lookup, reader.lookup.len() as u64, lattice_side * lattice_side)?;
+        expect_count(SectionKind::Tiles, reader.tiles.len() as u64, l * n * n)?;
+        expect_count(SectionKind::Triangles, reader.triangles.len() as u64, scene.triangle_count)?;
+        expect_count(SectionKind::Provenance, reader.provenance.len() as u64, scene.triangle_count)?;
+        expect_count(SectionKind::Sources, reader.sources.len() as u64, scene.source_count as u64)?;
+        expect_count(SectionKind::Inputs, reader.inputs.len() as u64, scene.input_count as u64)?;
+        Ok(reader)
+    }
+
+    /// The entry of a section kind, if present.
+    pub fn entry(&self, kind: SectionKind) -> Option<&'a SectionEntry> {
+        self.table.iter().find(|e| e.kind == kind as u32)
+    }
+
+    /// A name from STRINGS, or `None` if the reference is out of bounds or not UTF-8.
+    pub fn string(&self, offset: u32, length: u32) -> Option<&'a str> {
+        let start = offset as usize;
+        let bytes = self.strings.get(start..start.checked_add(length as usize)?)?;
+        std::str::from_utf8(bytes).ok()
+    }
+}
+
+/// The O(1) sanity checks on SCENE and PARAMS that later size computations rely on.
+fn check_scene_and_params(scene: &SceneRecord, params: &ParamsRecord) -> Result<(), FormatError> {
+    let invalid = |section: &'static str, problem: String| Err(FormatError::Invalid { section, problem });
+    if !(scene.radius.is_finite() && scene.radius > 0.0) {
+        return invalid("SCENE", format!("radius {} is not a positive finite number", scene.radius));
+    }
+    if !scene.center.iter().all(|c| c.is_finite()) {
+        return invalid("SCENE", format!("center {:?} is not finite", scene.center));
+    }
+    if scene.triangle_count > u32::MAX as u64 {
+        return invalid("SCENE", format!("triangle_count {} exceeds 2^32 - 1", scene.triangle_count));
+    }
+    let big_n = params.lattice_n as u64;
+    if big_n == 0 || big_n > 4096 {
+        return invalid("PARAMS", format!("lattice_n {big_n} is outside 1..=4096"));
+    }
+    if params.direction_count as u64 != 2 * big_n * big_n + 1 {
+        return invalid(
+            "PARAMS",
+            format!("direction_count {} is not 2N²+1 for N = {big_n}", params.direction_count),
+        );
+    }
+    if params.tile_resolution == 0 || params.tile_resolution > 1 << 16 {
+        return invalid("PARAMS", format!("tile_resolution {} is outside 1..=65536", params.tile_resolution));
+    }
+    if params.max_depth > MAX_DEPTH {
+        return invalid("PARAMS", format!("max_depth {} exceeds {MAX_DEPTH}", params.max_depth));
+    }
+    if !(params.margin.is_finite() && params.margin > 0.0 && params.margin < scene.radius) {
+        return invalid("PARAMS", format!("margin {} is not in (0, radius)", params.margin));
+    }
+    Ok(())
+}
+
+fn expect_count(kind: SectionKind, actual: u64, expected: u64) -> Result<(), FormatError> {
+    if actual == expected {
+        Ok(())
+    } else {
+        Err(FormatError::WrongElementCount { kind: kind.name(), actual, expected })
+    }
+}
+
+fn check_field(field: &'static str, found: u64, expected: u64) -> Result<(), FormatError> {
+    if found == expected {
+        Ok(())
+    } else {
+        Err(FormatError::BadHeaderField { field, found, expected })
+    }
+}
+
+/// Casts bytes to a slice of `T`, or says which section could not be cast.
+pub(crate) fn cast_slice<'b, T: Pod>(bytes: &'b [u8], kind: &'static str) -> Result<&'b [T], FormatError> {
+    bytemuck::try_cast_slice(bytes).map_err(|e| match e {
+        bytemuck::PodCastError::TargetAlignmentGreaterAndInputNotAligned => {
+            FormatError::Misaligned { kind, address: bytes.as_ptr() as usize }
+        }
+        _ => FormatError::Invalid { section: kind, problem: format!("length {} does not fit the element type", bytes.len()) },
+    })
+}
+
+/// The content hash of §3.1 over `header_and_table` (the first `128 + 72 × count` bytes).
+pub fn content_hash(header_and_table: &[u8]) -> [u8; 32] {
+    let mut h = blake3::Hasher::new();
+    h.update(&header_and_table[..CONTENT_HASH_RANGE.start]);
+    h.update(&[0u8; 32]);
+    h.update(&header_and_table[CONTENT_HASH_RANGE.end..]);
+    *h.finalize().as_bytes()
+}
+
+/// A guess at what damaged or foreign bytes are, for the bad-magic message.
+fn magic_hint(found: &[u8; 8]) -> &'static str {
+    if found[1..4] == MAGIC[1..4] {
+        if found[0] != 0x89 {
+            " (the first byte lost its high bit: the file went through a 7-bit text transfer)"
+        } else if found[4..6] == *b"\n\x1a" || found[4] == b'\n' {
+            " (\\r\\n became \\n: the file went through a text-mode transfer that converts line endings)"
+        } else if found[4..8] == *b"\r\n\x1a\r" || found[6..8] == *b"\r\n" {
+            " (\\n became \\r\\n: the file went through a text-mode transfer that converts line endings)"
+        } else {
+            " (the magic is damaged)"
+        }
+    } else if found[..4] == *b"glTF" || found[..1] == *b"{" || found[..2] == *b"v " || found[..1] == *b"#" {
+        " (this looks like a mesh: bake it with `vlf-bake bake`)"
+    } else {
+        ""
+    }
+}

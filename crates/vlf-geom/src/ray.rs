@@ -1,0 +1,69 @@
+//! Rays and hits, laid out exactly as the batch files of `formats/rays.md`.
+
+use bytemuck::{Pod, Zeroable};
+
+/// A ray: `org + t·dir` for `t` in `[tmin, tmax]`. `dir` need not be unit length; `t` is measured
+/// in units of `dir` (as in Embree). 32 bytes, the record of a rays file.
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+#[repr(C)]
+pub struct Ray {
+    pub org: [f32; 3],
+    pub tmin: f32,
+    pub dir: [f32; 3],
+    pub tmax: f32,
+}
+
+impl Ray {
+    pub fn new(org: [f32; 3], dir: [f32; 3]) -> Self {
+        Ray { org, tmin: 0.0, dir, tmax: f32::INFINITY }
+    }
+
+    pub fn with_interval(org: [f32; 3], dir: [f32; 3], tmin: f32, tmax: f32) -> Self {
+        Ray { org, tmin, dir, tmax }
+    }
+
+    /// Whether the ray can be traced: finite origin and direction, a nonzero direction, and an
+    /// interval `tmin ≤ tmax` without NaN. Invalid rays miss.
+    #[inline]
+    pub fn is_valid(&self) -> bool {
+        self.org.iter().all(|c| c.is_finite())
+            && self.dir.iter().all(|c| c.is_finite())
+            && self.dir.iter().any(|&c| c != 0.0)
+            && self.tmin <= self.tmax
+    }
+
+    /// The point at parameter `t`, in f64.
+    pub fn at(&self, t: f64) -> [f64; 3] {
+        std::array::from_fn(|i| self.org[i] as f64 + t * self.dir[i] as f64)
+    }
+}
+
+/// A hit: parameter `t`, triangle id `prim`, and barycentric weights `u` of `v1` and `v` of `v2`.
+/// 16 bytes, the record of a hits file.
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+#[repr(C)]
+pub struct Hit {
+    pub t: f32,
+    pub prim: u32,
+    pub u: f32,
+    pub v: f32,
+}
+
+impl Hit {
+    /// The record written for a miss.
+    pub const MISS: Hit = Hit { t: f32::INFINITY, prim: u32::MAX, u: 0.0, v: 0.0 };
+
+    /// The hits-file record of an optional hit.
+    pub fn record(hit: Option<Hit>) -> Hit {
+        hit.unwrap_or(Hit::MISS)
+    }
+}
+
+/// Something that answers ray queries: the field, the kd-tree baseline and the brute-force
+/// reference all implement it, so tests and benchmarks treat them alike.
+pub trait Intersector: Sync {
+    /// The closest hit in `[tmin, tmax]`, if any.
+    fn closest_hit(&self, ray: &Ray) -> Option<Hit>;
+    /// Whether anything is hit in `[tmin, tmax]` (shadow rays).
+    fn any_hit(&self, ray: &Ray) -> bool;
+}
