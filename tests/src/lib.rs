@@ -1,1 +1,356 @@
+//! Test support: the f64 brute-force oracle, ray families, and the comparison that every
+//! acceleration path is held to.
+//!
+//! Two references are used for every ray:
+//! - the *same-kernel* brute force ([`vlf_geom::BruteForce`]): every triangle tested with the
+//!   runtime's own f32 watertight kernel. The field tests a subset of the triangles with that
+//!   same kernel, so its closest `t` must be **bit-identical** and its any-hit answer equal: any
+//!   difference means the field lost a candidate. Zero tolerance.
+//! - the f64 oracle ([`oracle_closest`]): Möller–Trumbore in f64 on the same f32 vertices. The f32
+//!   answer must match it to float precision; where they differ only because the ray grazes an
+//!   edge or vertex (the hit point of either answer lies within 16 f32 ulps of the problem's
+//!   magnitude from an edge of its triangle), the ray is counted as ambiguous and reported, not
+//!   failed.
 
+use rayon::prelude::*;
+use std::path::{Path, PathBuf};
+use vlf_bake::generate::Rng;
+use vlf_bake::{BakeConfig, DepthPolicy, NoProgress, Scene};
+use vlf_geom::{BruteForce, Intersector, Ray};
+use vlf_runtime::Field;
+
+/// The workspace's `fixtures/` directory.
+pub fn fixtures() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../fixtures")
+}
+
+/// An f64 hit: parameter, triangle, smallest barycentric weight.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct OracleHit {
+    pub t: f64,
+    pub prim: u32,
+    pub min_bary: f64,
+}
+
+/// Möller–Trumbore in f64 against one triangle, on `[tmin, tmax]`, double-sided.
+pub fn oracle_triangle(ray: &Ray, tri: &[[f32; 3]; 3]) -> Option<(f64, f64)> {
+    let o = ray.org.map(f64::from);
+    let d = ray.dir.map(f64::from);
+    let v: [[f64; 3]; 3] = tri.map(|p| p.map(f64::from));
+    let e1 = sub(v[1], v[0]);
+    let e2 = sub(v[2], v[0]);
+    let p = cross(d, e2);
+    let det = dot(e1, p);
+    if det == 0.0 {
+        return None;
+    }
+    let inv = 1.0 / det;
+    let s = sub(o, v[0]);
+    let u = dot(s, p) * inv;
+    let q = cross(s, e1);
+    let w = dot(d, q) * inv;
+    if u < 0.0 || w < 0.0 || u + w > 1.0 {
+        return None;
+    }
+    let t = dot(e2, q) * inv;
+    if t < ray.tmin as f64 || t > ray.tmax as f64 {
+        return None;
+    }
+    Some((t, u.min(w).min(1.0 - u - w)))
+}
+
+/// The closest f64 hit over all triangles.
+pub fn oracle_closest(ray: &Ray, tris: &[[[f32; 3]; 3]]) -> Option<OracleHit> {
+    if !ray.is_valid() {
+        return None;
+    }
+    let mut best: Option<OracleHit> = None;
+    for (i, t) in tris.iter().enumerate() {
+        if let Some((t, b)) = oracle_triangle(ray, t)
+            && best.is_none_or(|h| t < h.t)
+        {
+            best = Some(OracleHit { t, prim: i as u32, min_bary: b });
+        }
+    }
+    best
+}
+
+fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+}
+
+/// Distance from `p` to the nearest edge of triangle `tri`, in world units.
+fn edge_distance(p: [f64; 3], tri: &[[f32; 3]; 3]) -> f64 {
+    (0..3)
+        .map(|e| {
+            let a = tri[e].map(f64::from);
+            let b = tri[(e + 1) % 3].map(f64::from);
+            let ab = sub(b, a);
+            let t = (dot(sub(p, a), ab) / dot(ab, ab).max(f64::MIN_POSITIVE)).clamp(0.0, 1.0);
+            let q = [a[0] + t * ab[0], a[1] + t * ab[1], a[2] + t * ab[2]];
+            dot(sub(p, q), sub(p, q)).sqrt()
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// Largest magnitude among the ray origin, a point and a triangle's vertices.
+fn magnitude(ray: &Ray, p: [f64; 3], tri: &[[f32; 3]; 3]) -> f64 {
+    ray.org
+        .iter()
+        .map(|c| c.abs() as f64)
+        .chain(p.iter().map(|c| c.abs()))
+        .chain(tri.iter().flatten().map(|c| c.abs() as f64))
+        .fold(0.0, f64::max)
+}
+
+/// Whether `ray.at(t)` lies within 64 f32 ulps of the problem's magnitude of `tri`'s plane.
+fn on_plane(ray: &Ray, t: f64, tri: &[[f32; 3]; 3]) -> bool {
+    let p = ray.at(t);
+    let v = tri.map(|q| q.map(f64::from));
+    let n = cross(sub(v[1], v[0]), sub(v[2], v[0]));
+    let dist = dot(n, sub(p, v[0])).abs() / dot(n, n).sqrt();
+    dist <= 64.0 * f32::EPSILON as f64 * magnitude(ray, p, tri)
+}
+
+/// Whether the hit on triangle `prim` at `t` lies within float precision of that triangle's
+/// edges: within 16 f32 ulps of the problem's magnitude (origin, hit point and vertices), where
+/// an f32 and an f64 intersector may legitimately disagree.
+fn grazes(ray: &Ray, t: f64, prim: u32, tris: &[[[f32; 3]; 3]]) -> bool {
+    let tri = &tris[prim as usize];
+    let p = ray.at(t);
+    edge_distance(p, tri) <= 16.0 * f32::EPSILON as f64 * magnitude(ray, p, tri)
+}
+
+/// Counts of one comparison run.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Tally {
+    pub rays: u64,
+    pub hits: u64,
+    /// Field closest `t` differs from the same-kernel brute force, or any-hit differs.
+    pub mismatches: u64,
+    /// f32 and f64 disagree beyond float precision on a ray that does not graze an edge.
+    pub kernel_mismatches: u64,
+    /// f32 and f64 disagree, but the ray grazes an edge or vertex.
+    pub ambiguous: u64,
+    pub examples: Vec<String>,
+}
+
+impl Tally {
+    pub fn add(&mut self, o: Tally) {
+        self.rays += o.rays;
+        self.hits += o.hits;
+        self.mismatches += o.mismatches;
+        self.kernel_mismatches += o.kernel_mismatches;
+        self.ambiguous += o.ambiguous;
+        self.examples.extend(o.examples.into_iter().take(5usize.saturating_sub(self.examples.len())));
+    }
+}
+
+/// Compares `accel` with both references on every ray.
+pub fn compare(accel: &dyn Intersector, tris: &[[[f32; 3]; 3]], rays: &[Ray]) -> Tally {
+    let brute = BruteForce { triangles: tris };
+    rays.par_chunks(512)
+        .map(|chunk| {
+            let mut t = Tally::default();
+            for ray in chunk {
+                t.rays += 1;
+                let got = accel.closest_hit(ray);
+                let want = brute.closest_hit(ray);
+                let got_any = accel.any_hit(ray);
+                let want_any = want.is_some();
+                let same = match (got, want) {
+                    (None, None) => true,
+                    (Some(a), Some(b)) => a.t.to_bits() == b.t.to_bits(),
+                    _ => false,
+                };
+                if !same || got_any != want_any {
+                    t.mismatches += 1;
+                    if t.examples.len() < 5 {
+                        t.examples
+                            .push(format!("ray {ray:?}: accelerated {got:?} any={got_any}, brute force {want:?}"));
+                    }
+                }
+                if want.is_some() {
+                    t.hits += 1;
+                }
+                let oracle = oracle_closest(ray, tris);
+                let agree = match (want, oracle) {
+                    (None, None) => true,
+                    (Some(a), Some(b)) => {
+                        let scale = ray.org.iter().map(|c| c.abs() as f64).fold(1.0, f64::max)
+                            / ray.dir.iter().map(|c| c.abs() as f64).fold(0.0, f64::max);
+                        (a.t as f64 - b.t).abs() <= 1e-5 * (b.t.abs() + scale)
+                            // Same triangle, and the f32 hit point lies on its plane to float
+                            // precision: a small backward error where t itself is ill-conditioned
+                            // (a ray nearly parallel to the triangle).
+                            || (a.prim == b.prim && on_plane(ray, a.t as f64, &tris[a.prim as usize]))
+                    }
+                    _ => false,
+                };
+                if !agree {
+                    let grazing = want.is_some_and(|h| grazes(ray, h.t as f64, h.prim, tris))
+                        || oracle.is_some_and(|h| grazes(ray, h.t, h.prim, tris));
+                    if grazing {
+                        t.ambiguous += 1;
+                    } else {
+                        t.kernel_mismatches += 1;
+                        if t.examples.len() < 5 {
+                            t.examples.push(format!("ray {ray:?}: f32 kernel {want:?}, f64 oracle {oracle:?}"));
+                        }
+                    }
+                }
+            }
+            t
+        })
+        .reduce(Tally::default, |mut a, b| {
+            a.add(b);
+            a
+        })
+}
+
+/// Asserts zero mismatches and reports the counts.
+pub fn assert_exact(label: &str, tally: &Tally) {
+    println!(
+        "{label}: {} rays, {} hits, {} mismatches, {} kernel mismatches, {} ambiguous (grazing)",
+        tally.rays, tally.hits, tally.mismatches, tally.kernel_mismatches, tally.ambiguous
+    );
+    assert_eq!(tally.mismatches, 0, "{label}: field differs from brute force: {:#?}", tally.examples);
+    assert_eq!(tally.kernel_mismatches, 0, "{label}: f32 kernel differs from the f64 oracle: {:#?}", tally.examples);
+}
+
+/// Bakes `scene` with explicit parameters into a temporary directory and opens it.
+pub fn bake(scene: &Scene, directions: u32, tiles: u32, depth: DepthPolicy) -> (tempfile::TempDir, Field) {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let path = dir.path().join("scene.vlf");
+    let config = BakeConfig { directions: Some(directions), tiles: Some(tiles), depth, ..BakeConfig::default() };
+    vlf_bake::bake_scene(scene, &config, &path, &NoProgress).expect("bake");
+    let field = Field::open(&path).expect("open");
+    (dir, field)
+}
+
+fn unit(rng: &mut Rng) -> [f64; 3] {
+    loop {
+        let v = [rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0)];
+        let l2 = dot(v, v);
+        if l2 > 1e-6 && l2 <= 1.0 {
+            let l = l2.sqrt();
+            return [v[0] / l, v[1] / l, v[2] / l];
+        }
+    }
+}
+
+fn in_ball(rng: &mut Rng, c: [f64; 3], r: f64) -> [f64; 3] {
+    let u = unit(rng);
+    let s = r * rng.unit().cbrt();
+    [c[0] + u[0] * s, c[1] + u[1] * s, c[2] + u[2] * s]
+}
+
+fn to_f32(v: [f64; 3]) -> [f32; 3] {
+    v.map(|c| c as f32)
+}
+
+/// The ray families every scene is tested with, `per_family` rays each: origins inside and
+/// outside, random and aimed directions, finite and infinite intervals, rays exactly parallel to
+/// stored directions, rays along tile borders, rays aimed exactly at vertices and edge midpoints.
+pub fn ray_families(
+    field: &Field,
+    tris: &[[[f32; 3]; 3]],
+    per_family: usize,
+    seed: u64,
+) -> Vec<(&'static str, Vec<Ray>)> {
+    let mut rng = Rng::new(seed);
+    let (c, r) = field.bounding_sphere();
+    let reader = field.reader();
+    let mut fams: Vec<(&'static str, Vec<Ray>)> = Vec::new();
+
+    let inside: Vec<Ray> =
+        (0..per_family).map(|_| Ray::new(to_f32(in_ball(&mut rng, c, r)), to_f32(unit(&mut rng)))).collect();
+    fams.push(("inside, random directions", inside));
+
+    let outside: Vec<Ray> = (0..per_family)
+        .map(|_| {
+            let u = unit(&mut rng);
+            let dist = rng.range(1.2, 4.0) * r;
+            let o = [c[0] + u[0] * dist, c[1] + u[1] * dist, c[2] + u[2] * dist];
+            let target = in_ball(&mut rng, c, r);
+            Ray::new(to_f32(o), to_f32(sub(target, o)))
+        })
+        .collect();
+    fams.push(("outside, aimed into the scene", outside));
+
+    let intervals: Vec<Ray> = (0..per_family)
+        .map(|_| {
+            let o = in_ball(&mut rng, c, 1.5 * r);
+            let d = unit(&mut rng);
+            let scale = rng.range(0.2, 3.0);
+            let tmin = if rng.unit() < 0.5 { 0.0 } else { rng.range(0.0, r) as f32 };
+            let tmax = tmin + rng.range(0.0, 2.0 * r) as f32;
+            Ray::with_interval(to_f32(o), to_f32([d[0] * scale, d[1] * scale, d[2] * scale]), tmin, tmax)
+        })
+        .collect();
+    fams.push(("finite intervals, unnormalised directions", intervals));
+
+    let l = reader.directions.len();
+    let parallel: Vec<Ray> = (0..per_family)
+        .map(|_| {
+            let j = (rng.next_u64() % l as u64) as usize;
+            let w = reader.directions[j];
+            let s = if rng.unit() < 0.5 { -1.0 } else { 1.0 };
+            Ray::new(to_f32(in_ball(&mut rng, c, 1.2 * r)), [w[0] * s, w[1] * s, w[2] * s])
+        })
+        .collect();
+    fams.push(("exactly parallel to a stored direction", parallel));
+
+    // Lines along tile borders: canonical x or y exactly on a border, back-rotated to world space.
+    let n = reader.params.tile_resolution as f64;
+    let borders: Vec<Ray> = (0..per_family)
+        .map(|_| {
+            let j = (rng.next_u64() % l as u64) as usize;
+            let m = reader.rotations[j];
+            let w = 2.0 * r / n;
+            let k = (rng.next_u64() % (n as u64 + 1)) as f64;
+            let mut p = [rng.range(-r, r), rng.range(-r, r), -1.5 * r];
+            p[(rng.next_u64() % 2) as usize] = -r + k * w;
+            // World point: c + Mᵀ p.
+            let world = [0, 1, 2].map(|i| c[i] + m[i] * p[0] + m[3 + i] * p[1] + m[6 + i] * p[2]);
+            let dir = [m[6], m[7], m[8]];
+            // Tilt some by less than a tile across the whole sphere.
+            let tilt = if rng.unit() < 0.5 { 0.0 } else { rng.range(-0.5, 0.5) * w / r };
+            let d = [dir[0] + tilt * m[0], dir[1] + tilt * m[1], dir[2] + tilt * m[2]];
+            Ray::new(to_f32(world), to_f32(d))
+        })
+        .collect();
+    fams.push(("along tile borders", borders));
+
+    let aimed: Vec<Ray> = (0..per_family)
+        .map(|_| {
+            let t = &tris[(rng.next_u64() % tris.len() as u64) as usize];
+            let target: [f64; 3] = match rng.next_u64() % 3 {
+                0 => t[(rng.next_u64() % 3) as usize].map(f64::from),
+                1 => std::array::from_fn(|k| 0.5 * (t[0][k] as f64 + t[1][k] as f64)),
+                _ => std::array::from_fn(|k| (t[0][k] as f64 + t[1][k] as f64 + t[2][k] as f64) / 3.0),
+            };
+            let o = if rng.unit() < 0.5 { in_ball(&mut rng, c, r) } else { in_ball(&mut rng, c, 3.0 * r) };
+            Ray::new(to_f32(o), to_f32(sub(target, o)))
+        })
+        .collect();
+    fams.push(("aimed at vertices, edge midpoints and centroids", aimed));
+    fams
+}
+
+/// Runs every ray family against a field and asserts exactness.
+pub fn check_field(label: &str, field: &Field, tris: &[[[f32; 3]; 3]], per_family: usize, seed: u64) -> Tally {
+    let mut total = Tally::default();
+    for (family, rays) in ray_families(field, tris, per_family, seed) {
+        let tally = compare(field, tris, &rays);
+        assert_exact(&format!("{label} / {family}"), &tally);
+        total.add(tally);
+    }
+    total
+}

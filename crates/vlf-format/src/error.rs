@@ -28,11 +28,15 @@ pub enum FormatError {
     MissingSection { kind: &'static str },
     #[error("section {kind} appears twice (table entries {first} and {second})")]
     DuplicateSection { kind: String, first: usize, second: usize },
-    #[error("section {kind} is stored with codec {codec} (zstd); unpack the field first (`vlf-bake pack --unpack`) or open it with a reader that decompresses")]
+    #[error(
+        "section {kind} is stored with codec {codec} (zstd); unpack the field first (`vlf-bake pack --unpack`) or open it with a reader that decompresses"
+    )]
     CompressedSection { kind: &'static str, codec: u32 },
     #[error("section {kind} has {actual} elements, expected {expected}")]
     WrongElementCount { kind: &'static str, actual: u64, expected: u64 },
-    #[error("section {kind} is not aligned in memory for its element type (address {address:#x}); map the file or copy it into an aligned buffer")]
+    #[error(
+        "section {kind} is not aligned in memory for its element type (address {address:#x}); map the file or copy it into an aligned buffer"
+    )]
     Misaligned { kind: &'static str, address: usize },
     #[error("{section}: {problem}")]
     Invalid { section: &'static str, problem: String },

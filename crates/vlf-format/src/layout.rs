@@ -73,7 +73,7 @@ pub struct Request {
     pub leaf_size: u32,
     pub max_depth: u32,
     pub max_bytes: u64,
-    pub reserved: u64,
+    pub max_bytes_per_triangle: u64,
 }
 
 /// SCENE (§5.1): the bounding sphere that normalises the scene.
@@ -105,7 +105,8 @@ pub struct ParamsRecord {
     pub reserved0: u32,
     pub max_bytes: u64,
     pub margin: f64,
-    pub reserved1: [u64; 2],
+    pub max_bytes_per_triangle: u64,
+    pub reserved1: u64,
 }
 
 /// BEAMS (§5.5): where one direction's leaves and ids live.

@@ -63,11 +63,7 @@ pub fn read_header_and_table(bytes: &[u8]) -> Result<(&Header, &[SectionEntry]),
         return Err(FormatError::ReservedNotZero { field: "reserved1" });
     }
     if header.file_length != len {
-        let what = if len < header.file_length {
-            "the file is truncated"
-        } else {
-            "the file has bytes appended"
-        };
+        let what = if len < header.file_length { "the file is truncated" } else { "the file has bytes appended" };
         return Err(FormatError::LengthMismatch { actual: len, expected: header.file_length, what });
     }
     if header.section_count > MAX_SECTIONS {
@@ -75,18 +71,11 @@ pub fn read_header_and_table(bytes: &[u8]) -> Result<(&Header, &[SectionEntry]),
     }
     let table_end = HEADER_SIZE as u64 + header.section_count as u64 * TABLE_ENTRY_SIZE as u64;
     if table_end > len {
-        return Err(FormatError::TableOutOfBounds {
-            count: header.section_count,
-            end: table_end,
-            file_length: len,
-        });
+        return Err(FormatError::TableOutOfBounds { count: header.section_count, end: table_end, file_length: len });
     }
     let computed = content_hash(&bytes[..table_end as usize]);
     if computed != header.content_hash {
-        return Err(FormatError::ContentHashMismatch {
-            stored: hex(&header.content_hash),
-            computed: hex(&computed),
-        });
+        return Err(FormatError::ContentHashMismatch { stored: hex(&header.content_hash), computed: hex(&computed) });
     }
     // The header is 8-aligned in any buffer the caller could cast sections from; for the table we
     // fall back to an error rather than copying, as for sections.
@@ -132,11 +121,7 @@ pub fn read_header_and_table(bytes: &[u8]) -> Result<(&Header, &[SectionEntry]),
         }
         if let Some(kind) = SectionKind::from_u32(e.kind) {
             if e.element_size != kind.element_size() {
-                return Err(bad(format!(
-                    "element_size is {}, the spec says {}",
-                    e.element_size,
-                    kind.element_size()
-                )));
+                return Err(bad(format!("element_size is {}, the spec says {}", e.element_size, kind.element_size())));
             }
         }
         if let Some(first) = table[..index].iter().position(|p| p.kind == e.kind) {
@@ -171,10 +156,10 @@ impl<'a> FieldReader<'a> {
             }
             Ok(&bytes[e.offset as usize..(e.offset + e.stored_length) as usize])
         };
-        fn typed<'b, T: Pod>(bytes: &'b [u8], kind: SectionKind) -> Result<&'b [T], FormatError> {
+        fn typed<T: Pod>(bytes: &[u8], kind: SectionKind) -> Result<&[T], FormatError> {
             cast_slice(bytes, kind.name())
         }
-        fn one<'b, T: Pod>(bytes: &'b [u8], kind: SectionKind) -> Result<&'b T, FormatError> {
+        fn one<T: Pod>(bytes: &[u8], kind: SectionKind) -> Result<&T, FormatError> {
             let s: &[T] = typed(bytes, kind)?;
             expect_count(kind, s.len() as u64, 1)?;
             Ok(&s[0])
@@ -250,10 +235,7 @@ fn check_scene_and_params(scene: &SceneRecord, params: &ParamsRecord) -> Result<
         return invalid("PARAMS", format!("lattice_n {big_n} is outside 1..=4096"));
     }
     if params.direction_count as u64 != 2 * big_n * big_n + 1 {
-        return invalid(
-            "PARAMS",
-            format!("direction_count {} is not 2N²+1 for N = {big_n}", params.direction_count),
-        );
+        return invalid("PARAMS", format!("direction_count {} is not 2N²+1 for N = {big_n}", params.direction_count));
     }
     if params.tile_resolution == 0 || params.tile_resolution > 1 << 16 {
         return invalid("PARAMS", format!("tile_resolution {} is outside 1..=65536", params.tile_resolution));
@@ -276,11 +258,7 @@ fn expect_count(kind: SectionKind, actual: u64, expected: u64) -> Result<(), For
 }
 
 fn check_field(field: &'static str, found: u64, expected: u64) -> Result<(), FormatError> {
-    if found == expected {
-        Ok(())
-    } else {
-        Err(FormatError::BadHeaderField { field, found, expected })
-    }
+    if found == expected { Ok(()) } else { Err(FormatError::BadHeaderField { field, found, expected }) }
 }
 
 /// Casts bytes to a slice of `T`, or says which section could not be cast.
@@ -289,7 +267,10 @@ pub(crate) fn cast_slice<'b, T: Pod>(bytes: &'b [u8], kind: &'static str) -> Res
         bytemuck::PodCastError::TargetAlignmentGreaterAndInputNotAligned => {
             FormatError::Misaligned { kind, address: bytes.as_ptr() as usize }
         }
-        _ => FormatError::Invalid { section: kind, problem: format!("length {} does not fit the element type", bytes.len()) },
+        _ => FormatError::Invalid {
+            section: kind,
+            problem: format!("length {} does not fit the element type", bytes.len()),
+        },
     })
 }
 
@@ -305,16 +286,21 @@ pub fn content_hash(header_and_table: &[u8]) -> [u8; 32] {
 /// A guess at what damaged or foreign bytes are, for the bad-magic message.
 fn magic_hint(found: &[u8; 8]) -> &'static str {
     if found[1..4] == MAGIC[1..4] {
-        if found[0] != 0x89 {
+        if found[0] == MAGIC[0] & 0x7f {
             " (the first byte lost its high bit: the file went through a 7-bit text transfer)"
-        } else if found[4..6] == *b"\n\x1a" || found[4] == b'\n' {
-            " (\\r\\n became \\n: the file went through a text-mode transfer that converts line endings)"
-        } else if found[4..8] == *b"\r\n\x1a\r" || found[6..8] == *b"\r\n" {
+        } else if found[4..7] == *b"\r\r\n" {
             " (\\n became \\r\\n: the file went through a text-mode transfer that converts line endings)"
+        } else if found[4..6] == *b"\n\x1a" {
+            " (\\r\\n became \\n: the file went through a text-mode transfer that converts line endings)"
         } else {
             " (the magic is damaged)"
         }
-    } else if found[..4] == *b"glTF" || found[..1] == *b"{" || found[..2] == *b"v " || found[..1] == *b"#" {
+    } else if found[..4] == *b"glTF"
+        || found[0] == b'{'
+        || found[..2] == *b"v "
+        || found[0] == b'#'
+        || found[..2] == *b"o "
+    {
         " (this looks like a mesh: bake it with `vlf-bake bake`)"
     } else {
         ""

@@ -75,7 +75,7 @@ fn check_reserved(f: &FieldReader<'_>) -> Result<(), FormatError> {
     if f.scene.reserved != [0; 3] {
         return Err(invalid("SCENE", "reserved fields are not zero".into()));
     }
-    if f.params.reserved0 != 0 || f.params.reserved1 != [0; 2] {
+    if f.params.reserved0 != 0 || f.params.reserved1 != 0 {
         return Err(invalid("PARAMS", "reserved fields are not zero".into()));
     }
     if f.statistics.reserved != [0; 10] {
@@ -154,16 +154,25 @@ fn check_beams_tiles_leaves(f: &FieldReader<'_>, report: &mut VerifyReport) -> R
             for w in tile_bounds.windows(2) {
                 let leaf = &ids[w[0] as usize..w[1] as usize];
                 if let Some(&id) = leaf.iter().find(|&&id| id as u64 >= tri_count) {
-                    return Err(invalid("TRIANGLE_IDS", format!("direction {j}, tile {i}: id {id} >= triangle_count {tri_count}")));
+                    return Err(invalid(
+                        "TRIANGLE_IDS",
+                        format!("direction {j}, tile {i}: id {id} >= triangle_count {tri_count}"),
+                    ));
                 }
                 if leaf.windows(2).any(|p| p[0] >= p[1]) {
-                    return Err(invalid("TRIANGLE_IDS", format!("direction {j}, tile {i}: ids in a leaf are not strictly increasing")));
+                    return Err(invalid(
+                        "TRIANGLE_IDS",
+                        format!("direction {j}, tile {i}: ids in a leaf are not strictly increasing"),
+                    ));
                 }
             }
             next_leaf += leaves;
         }
         if next_leaf != beam.leaf_count {
-            return Err(invalid("TILES", format!("direction {j}: tiles hold {next_leaf} leaves, BEAMS says {}", beam.leaf_count)));
+            return Err(invalid(
+                "TILES",
+                format!("direction {j}: tiles hold {next_leaf} leaves, BEAMS says {}", beam.leaf_count),
+            ));
         }
         report.tiles += n2 as u64;
         report.ids += beam.id_count;
@@ -179,7 +188,10 @@ fn check_beams_tiles_leaves(f: &FieldReader<'_>, report: &mut VerifyReport) -> R
 fn check_triangles_and_provenance(f: &FieldReader<'_>) -> Result<(), FormatError> {
     for (i, t) in f.triangles.iter().enumerate() {
         if t.v.iter().any(|v| v[3] != 0.0 || !v[..3].iter().all(|c| c.is_finite())) {
-            return Err(invalid("TRIANGLES", format!("triangle {i}: a coordinate is not finite or padding is not zero")));
+            return Err(invalid(
+                "TRIANGLES",
+                format!("triangle {i}: a coordinate is not finite or padding is not zero"),
+            ));
         }
     }
     for (i, p) in f.provenance.iter().enumerate() {
@@ -232,7 +244,10 @@ fn check_statistics(f: &FieldReader<'_>) -> Result<(), FormatError> {
     if recount != *f.statistics {
         return Err(invalid(
             "STATISTICS",
-            format!("stored statistics differ from a recount of the tiles (stored {:?}, recount {:?})", f.statistics, recount),
+            format!(
+                "stored statistics differ from a recount of the tiles (stored {:?}, recount {:?})",
+                f.statistics, recount
+            ),
         ));
     }
     Ok(())

@@ -45,7 +45,8 @@ impl Camera {
     /// 2.5 radii away, with a field of view that frames the whole sphere.
     pub fn outside(center: [f64; 3], radius: f64, aspect: f64) -> Self {
         let dir = normalize([0.45, 0.3, 1.0]);
-        let eye = [center[0] + dir[0] * 2.5 * radius, center[1] + dir[1] * 2.5 * radius, center[2] + dir[2] * 2.5 * radius];
+        let eye =
+            [center[0] + dir[0] * 2.5 * radius, center[1] + dir[1] * 2.5 * radius, center[2] + dir[2] * 2.5 * radius];
         // The sphere subtends asin(1/2.5) = 23.6° half-angle; 50° leaves a small border.
         Camera::look_at(eye, center, [0.0, 1.0, 0.0], 50.0, aspect)
     }

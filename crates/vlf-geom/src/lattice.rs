@@ -152,11 +152,7 @@ pub fn candidates(n: u32, ax: f64, ay: f64, z: f64) -> Candidates {
     let (i, k) = (u.floor(), v.floor());
     let (fu, fv) = (u - i, v - k);
     let (i, k) = (i as u32, k as u32);
-    let raw = if fu + fv < 1.0 {
-        [(i, k), (i + 1, k), (i, k + 1)]
-    } else {
-        [(i + 1, k), (i, k + 1), (i + 1, k + 1)]
-    };
+    let raw = if fu + fv < 1.0 { [(i, k), (i + 1, k), (i, k + 1)] } else { [(i + 1, k), (i, k + 1), (i + 1, k + 1)] };
     let mut out = Candidates { cells: [(i.min(n), 0); 3], len: 0 };
     for c in raw {
         if c.0 + c.1 <= n {

@@ -1,1 +1,302 @@
+//! Load a baked VLF visibility field instantly and answer ray queries from the mapped bytes.
+//!
+//! A field is the data structure of Mortensen et al., *A Visibility Field for Ray Tracing*:
+//! for each of `l` directions an `n × n` grid of parallel beams, each with a 1D BSP of the
+//! triangles along it. [`Field::open`] maps the file and checks its header and section table,
+//! in time independent of the file's size; queries then read the mapped bytes directly.
+//!
+//! ```no_run
+//! use vlf_runtime::{Field, Ray};
+//!
+//! let field = Field::open("bunny.vlf")?;
+//! let ray = Ray::new([0.0, 0.1, 2.0], [0.0, 0.0, -1.0]);
+//! if let Some(hit) = field.closest_hit(&ray) {
+//!     let origin = field.provenance(hit.prim).unwrap();
+//!     println!("t = {}, triangle {} of {}", hit.t, origin.index, origin.input);
+//! }
+//! # Ok::<(), vlf_runtime::OpenError>(())
+//! ```
+//!
+//! `Field` is `Send + Sync`: share one across threads. Queries allocate nothing.
 
+mod query;
+
+use std::fs::File;
+use std::io::Read;
+use std::path::{Path, PathBuf};
+
+pub use query::{Counter, FieldView, TraceStats};
+pub use vlf_format::{FieldReader, FormatError, hex};
+pub use vlf_geom::{Hit, Intersector, Ray};
+
+/// Why a field could not be opened.
+#[derive(Debug, thiserror::Error)]
+pub enum OpenError {
+    #[error("cannot read field {path}: {source}")]
+    Io { path: PathBuf, source: std::io::Error },
+    #[error("{path} is not a valid field: {source}")]
+    Format { path: PathBuf, source: FormatError },
+    #[error("not a valid field: {0}")]
+    Bytes(#[from] FormatError),
+}
+
+/// Where a field's bytes live.
+enum Backing {
+    /// A read-only memory map of the file.
+    Map(memmap2::Mmap),
+    /// An owned copy, 8-byte aligned so sections can be cast in place.
+    Owned { words: Vec<u64>, len: usize },
+}
+
+impl Backing {
+    fn bytes(&self) -> &[u8] {
+        match self {
+            Backing::Map(m) => m,
+            Backing::Owned { words, len } => &bytemuck::cast_slice(words)[..*len],
+        }
+    }
+
+    fn copy_of(bytes: &[u8]) -> Backing {
+        let mut words = vec![0u64; bytes.len().div_ceil(8)];
+        bytemuck::cast_slice_mut::<u64, u8>(&mut words)[..bytes.len()].copy_from_slice(bytes);
+        Backing::Owned { words, len: bytes.len() }
+    }
+}
+
+self_cell::self_cell!(
+    struct FieldCell {
+        owner: Backing,
+        #[covariant]
+        dependent: FieldView,
+    }
+);
+
+/// An open visibility field.
+pub struct Field {
+    cell: FieldCell,
+}
+
+/// Where a triangle came from (the field's PROVENANCE, SOURCES and INPUTS sections).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Provenance<'a> {
+    /// The input file's name (final path component).
+    pub input: &'a str,
+    /// The object or group (OBJ) or mesh (glTF) name; may be empty.
+    pub name: &'a str,
+    /// 1 = OBJ object or group, 2 = glTF primitive, 3 = supplied by a program.
+    pub kind: u32,
+    /// OBJ model index or glTF mesh index.
+    pub mesh: u32,
+    /// glTF primitive index within the mesh (0 otherwise).
+    pub primitive: u32,
+    /// glTF node index (`u32::MAX` otherwise).
+    pub node: u32,
+    /// Material index in the input (`u32::MAX` if none).
+    pub material: u32,
+    /// The triangle's index within its source.
+    pub index: u32,
+}
+
+impl Field {
+    /// Opens a field by memory-mapping it. Checks the header and section table (time independent
+    /// of the file size); reads nothing else until queried.
+    ///
+    /// # The mapping contract
+    /// The file must not be modified in place or truncated while the field is open: the mapping
+    /// shows the file's current bytes. `vlf-bake` never does either: it writes a new file and
+    /// renames it over the old one, which leaves this mapping on the old file. Should another
+    /// program modify the file in place anyway, every read from the mapping is bounds-checked, so
+    /// the queries give wrong answers but never read outside the mapping; a truncation makes the
+    /// operating system raise `SIGBUS` on access. If you cannot rule that out, use [`Field::read`].
+    pub fn open(path: impl AsRef<Path>) -> Result<Field, OpenError> {
+        let path = path.as_ref();
+        let io = |source| OpenError::Io { path: path.to_owned(), source };
+        let file = File::open(path).map_err(io)?;
+        let len = file.metadata().map_err(io)?.len();
+        if len < vlf_format::HEADER_SIZE as u64 {
+            // Too short to map usefully; let the reader name the problem.
+            let mut bytes = Vec::new();
+            file.take(len).read_to_end(&mut bytes).map_err(io)?;
+            return Self::from_backing(Backing::copy_of(&bytes)).map_err(|e| e.with_path(path));
+        }
+        // SAFETY: `Mmap::map` is unsafe because the mapped file could change underneath us. This
+        // is the mapping contract documented above: our tools never modify a field in place, and
+        // every read through the mapping is bounds-checked, so a concurrent modification by a
+        // third party yields wrong answers rather than out-of-bounds reads. The mapping is
+        // read-only and lives as long as the `Field` (it is the self_cell owner).
+        let map = unsafe { memmap2::Mmap::map(&file) }.map_err(io)?;
+        Self::from_backing(Backing::Map(map)).map_err(|e| e.with_path(path))
+    }
+
+    /// Opens a field by reading the whole file into memory (no mapping contract; time linear in
+    /// the file size).
+    pub fn read(path: impl AsRef<Path>) -> Result<Field, OpenError> {
+        let path = path.as_ref();
+        let bytes = std::fs::read(path).map_err(|source| OpenError::Io { path: path.to_owned(), source })?;
+        Self::from_backing(Backing::copy_of(&bytes)).map_err(|e| e.with_path(path))
+    }
+
+    /// Opens a field from bytes already in memory. The bytes are copied once into an aligned
+    /// buffer; to query borrowed, aligned bytes without a copy use [`FieldView::from_bytes`].
+    pub fn from_bytes(bytes: &[u8]) -> Result<Field, OpenError> {
+        Self::from_backing(Backing::copy_of(bytes))
+    }
+
+    fn from_backing(backing: Backing) -> Result<Field, OpenError> {
+        let cell = FieldCell::try_new(backing, |b| FieldReader::new(b.bytes()).map(FieldView::new))?;
+        Ok(Field { cell })
+    }
+
+    /// The query engine over the field's bytes.
+    #[inline(always)]
+    pub fn view(&self) -> &FieldView<'_> {
+        self.cell.borrow_dependent()
+    }
+
+    /// The validated sections, for tools.
+    pub fn reader(&self) -> &FieldReader<'_> {
+        &self.view().reader
+    }
+
+    /// The closest hit of `ray` on `[tmin, tmax]`.
+    #[inline]
+    pub fn closest_hit(&self, ray: &Ray) -> Option<Hit> {
+        self.view().closest_hit(ray)
+    }
+
+    /// Whether `ray` hits anything on `[tmin, tmax]`.
+    #[inline]
+    pub fn any_hit(&self, ray: &Ray) -> bool {
+        self.view().any_hit(ray)
+    }
+
+    /// Closest hits of a batch: `out[i]` is the hit record of `rays[i]` ([`Hit::MISS`] on a miss).
+    /// Panics if the slices differ in length.
+    pub fn closest_hits(&self, rays: &[Ray], out: &mut [Hit]) {
+        assert_eq!(rays.len(), out.len(), "one output per ray");
+        let view = self.view();
+        for (r, o) in rays.iter().zip(out) {
+            *o = Hit::record(view.closest_hit(r));
+        }
+    }
+
+    /// Any-hit answers of a batch. Panics if the slices differ in length.
+    pub fn any_hits(&self, rays: &[Ray], out: &mut [bool]) {
+        assert_eq!(rays.len(), out.len(), "one output per ray");
+        let view = self.view();
+        for (r, o) in rays.iter().zip(out) {
+            *o = view.any_hit(r);
+        }
+    }
+
+    /// [`Field::closest_hits`] on all cores (rayon's global pool, or the pool installed around
+    /// the call).
+    #[cfg(feature = "rayon")]
+    pub fn par_closest_hits(&self, rays: &[Ray], out: &mut [Hit]) {
+        use rayon::prelude::*;
+        assert_eq!(rays.len(), out.len(), "one output per ray");
+        let view = self.view();
+        rays.par_iter().zip(out.par_iter_mut()).with_min_len(256).for_each(|(r, o)| {
+            *o = Hit::record(view.closest_hit(r));
+        });
+    }
+
+    /// [`Field::any_hits`] on all cores.
+    #[cfg(feature = "rayon")]
+    pub fn par_any_hits(&self, rays: &[Ray], out: &mut [bool]) {
+        use rayon::prelude::*;
+        assert_eq!(rays.len(), out.len(), "one output per ray");
+        let view = self.view();
+        rays.par_iter().zip(out.par_iter_mut()).with_min_len(256).for_each(|(r, o)| {
+            *o = view.any_hit(r);
+        });
+    }
+
+    /// Where triangle `id` came from, or `None` if `id` is out of range (or the file lies).
+    pub fn provenance(&self, id: u32) -> Option<Provenance<'_>> {
+        let r = self.reader();
+        let p = r.provenance.get(id as usize)?;
+        let s = r.sources.get(p.source as usize)?;
+        let input = r.inputs.get(s.input as usize)?;
+        Some(Provenance {
+            input: r.string(input.name_offset, input.name_length)?,
+            name: r.string(s.name_offset, s.name_length)?,
+            kind: s.kind,
+            mesh: s.mesh,
+            primitive: s.primitive,
+            node: s.node,
+            material: s.material,
+            index: p.index,
+        })
+    }
+
+    /// The vertices of triangle `id`.
+    pub fn triangle(&self, id: u32) -> Option<[[f32; 3]; 3]> {
+        let t = self.reader().triangles.get(id as usize)?;
+        Some([t.vertex(0), t.vertex(1), t.vertex(2)])
+    }
+
+    /// The content hash (`formats/vlf.md` §3.1), which identifies these exact bytes.
+    pub fn content_hash(&self) -> [u8; 32] {
+        self.reader().header.content_hash
+    }
+
+    /// The input hash (§3.2), which identifies the bake's inputs and parameters.
+    pub fn input_hash(&self) -> [u8; 32] {
+        self.reader().header.input_hash
+    }
+
+    pub fn triangle_count(&self) -> u32 {
+        self.reader().triangles.len() as u32
+    }
+
+    pub fn direction_count(&self) -> u32 {
+        self.reader().params.direction_count
+    }
+
+    pub fn tile_resolution(&self) -> u32 {
+        self.reader().params.tile_resolution
+    }
+
+    /// Centre and radius of the scene's bounding sphere.
+    pub fn bounding_sphere(&self) -> ([f64; 3], f64) {
+        (self.reader().scene.center, self.reader().scene.radius)
+    }
+
+    /// The size of the field in bytes.
+    pub fn len_bytes(&self) -> u64 {
+        self.reader().bytes.len() as u64
+    }
+}
+
+impl<'a> FieldView<'a> {
+    /// A query engine over borrowed bytes, without a copy. The bytes must be 8-byte aligned
+    /// ([`FormatError::Misaligned`] otherwise).
+    pub fn from_bytes(bytes: &'a [u8]) -> Result<FieldView<'a>, FormatError> {
+        FieldReader::new(bytes).map(FieldView::new)
+    }
+}
+
+impl Intersector for Field {
+    fn closest_hit(&self, ray: &Ray) -> Option<Hit> {
+        Field::closest_hit(self, ray)
+    }
+    fn any_hit(&self, ray: &Ray) -> bool {
+        Field::any_hit(self, ray)
+    }
+}
+
+impl OpenError {
+    fn with_path(self, path: &Path) -> OpenError {
+        match self {
+            OpenError::Bytes(source) => OpenError::Format { path: path.to_owned(), source },
+            other => other,
+        }
+    }
+}
+
+#[allow(dead_code)]
+fn assert_send_sync() {
+    fn is<T: Send + Sync>() {}
+    is::<Field>();
+}

@@ -1,0 +1,592 @@
+//! The bake (paper §3.1, §3.2, §4 and §5): for every direction, rotate the scene into the
+//! direction's canonical frame, rasterise every triangle conservatively into the `n × n` tiles,
+//! and give each tile a linearised 1D BSP along the beam.
+//!
+//! Directions are independent, so they are baked in parallel (rayon) in chunks, and each chunk is
+//! written in direction order to spill files: the output bytes do not depend on the thread count,
+//! and memory does not grow with the field's size. The spill files are anonymous temporary files
+//! in the output directory; the field itself is written to a named temporary file there, flushed,
+//! synced and renamed over the output path, so the path holds the old field or the new one, never
+//! a partial one.
+
+use crate::params::{Choice, DepthPolicy, Params};
+use crate::raster::rasterize;
+use crate::scene::Scene;
+use rayon::prelude::*;
+use std::fs::File;
+use std::io::{self, BufWriter, Seek, Write};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+use vlf_format::{
+    BeamRecord, HashingWriter, ParamsRecord, Payload, Request, SceneRecord, SectionKind, SectionPayload,
+    StatisticsRecord, TileRecord, VERSION_MAJOR, Z_LEVELS,
+};
+use vlf_geom::Lattice;
+use vlf_geom::frame::{frame, mul};
+
+/// Bumped whenever the baker's output for the same inputs and request changes (part of the input
+/// hash, `formats/vlf.md` §3.2).
+pub const BAKER_REVISION: u32 = 1;
+
+/// The conservative margin as a fraction of the bounding radius (`formats/vlf.md` §6.2).
+pub const MARGIN_FRACTION: f64 = 1.0 / (1u64 << 20) as f64;
+
+/// Why a bake failed.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum BakeError {
+    #[error("cannot write {path}: {source}")]
+    Io { path: PathBuf, source: io::Error },
+    #[error("{0}")]
+    Params(String),
+    #[error(
+        "direction {direction} needs {count} {what}, more than the format's 2^32 - 1 per direction; lower --tiles or the scene size"
+    )]
+    DirectionTooLarge { direction: usize, count: u64, what: &'static str },
+}
+
+/// Progress callbacks; the CLI draws a bar, tests pass [`NoProgress`].
+pub trait Progress: Sync {
+    /// A phase with `total` units of work begins.
+    fn begin(&self, _phase: &str, _total: u64) {}
+    /// `done` more units of the current phase are complete.
+    fn advance(&self, _done: u64) {}
+    /// The current phase ended.
+    fn end(&self) {}
+}
+
+/// Reports nothing.
+pub struct NoProgress;
+impl Progress for NoProgress {}
+
+/// The scene prepared once for all directions: unique vertices relative to the sphere centre and
+/// triangles as vertex indices.
+pub struct Prepared<'a> {
+    pub scene: &'a Scene,
+    pub center: [f64; 3],
+    pub radius: f64,
+    pub aabb: ([f64; 3], [f64; 3]),
+    /// Unique vertex positions minus the centre, in f64.
+    vertices: Vec<[f64; 3]>,
+    triangles: Vec<[u32; 3]>,
+}
+
+impl<'a> Prepared<'a> {
+    pub fn new(scene: &'a Scene) -> Self {
+        let mut index = std::collections::HashMap::with_capacity(scene.triangles.len());
+        let mut unique: Vec<[f32; 3]> = Vec::with_capacity(scene.triangles.len());
+        let mut triangles = Vec::with_capacity(scene.triangles.len());
+        for t in &scene.triangles {
+            let mut tri = [0u32; 3];
+            for (k, slot) in tri.iter_mut().enumerate() {
+                let v = t.vertex(k);
+                // Bit patterns as keys: -0.0 and 0.0 stay distinct, which is harmless.
+                let key = v.map(f32::to_bits);
+                *slot = *index.entry(key).or_insert_with(|| {
+                    unique.push(v);
+                    (unique.len() - 1) as u32
+                });
+            }
+            triangles.push(tri);
+        }
+        let mut lo = [f64::INFINITY; 3];
+        let mut hi = [f64::NEG_INFINITY; 3];
+        for v in &unique {
+            for i in 0..3 {
+                lo[i] = lo[i].min(v[i] as f64);
+                hi[i] = hi[i].max(v[i] as f64);
+            }
+        }
+        let center: [f64; 3] = std::array::from_fn(|i| 0.5 * (lo[i] + hi[i]));
+        let vertices: Vec<[f64; 3]> = unique.iter().map(|v| std::array::from_fn(|i| v[i] as f64 - center[i])).collect();
+        let r2 = vertices.iter().map(|v| v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).fold(0.0f64, f64::max);
+        // Grown a little so every vertex is strictly inside despite rounding.
+        let radius = r2.sqrt() * (1.0 + 1e-9) + f64::MIN_POSITIVE;
+        Prepared { scene, center, radius, aabb: (lo, hi), vertices, triangles }
+    }
+
+    pub fn triangle_count(&self) -> usize {
+        self.triangles.len()
+    }
+}
+
+/// One direction's part of the TILES, LEAF_BOUNDS and TRIANGLE_IDS sections.
+pub struct DirectionData {
+    pub tiles: Vec<TileRecord>,
+    /// `leaf_count + 1` bounds, relative to the direction's first id.
+    pub bounds: Vec<u32>,
+    pub ids: Vec<u32>,
+    pub stats: StatisticsRecord,
+}
+
+impl DirectionData {
+    /// Bytes this direction adds to the file.
+    pub fn bytes(&self) -> u64 {
+        (self.tiles.len() * size_of::<TileRecord>() + 4 * (self.bounds.len() + self.ids.len())) as u64
+            + size_of::<BeamRecord>() as u64
+    }
+}
+
+/// One rasterised (tile, triangle) pair with the triangle's z range in the tile, grown by μ.
+#[derive(Clone, Copy)]
+struct Entry {
+    tile: u32,
+    tri: u32,
+    z0: f64,
+    z1: f64,
+}
+
+/// Reusable per-thread buffers.
+#[derive(Default)]
+pub struct Scratch {
+    projected: Vec<[f64; 3]>,
+    entries: Vec<Entry>,
+    sorted: Vec<Entry>,
+    tile_start: Vec<u32>,
+    leaf_fill: Vec<u32>,
+}
+
+/// Bakes direction `j` (rotation `m`).
+pub fn bake_direction(
+    prep: &Prepared<'_>,
+    params: &Params,
+    m: &[f64; 9],
+    j: usize,
+    s: &mut Scratch,
+) -> Result<DirectionData, BakeError> {
+    let n = params.tiles;
+    let n2 = n as usize * n as usize;
+    let r = prep.radius;
+    let w = 2.0 * r / n as f64;
+    let margin = params.margin;
+    let e = margin / w;
+
+    // Canonical coordinates: (u, v) in tile units, z in world units.
+    s.projected.clear();
+    s.projected.extend(prep.vertices.iter().map(|&v| {
+        let p = mul(m, v);
+        [(p[0] + r) / w, (p[1] + r) / w, p[2]]
+    }));
+    s.entries.clear();
+    for (id, tri) in prep.triangles.iter().enumerate() {
+        let [a, b, c] = tri.map(|k| s.projected[k as usize]);
+        let entries = &mut s.entries;
+        rasterize(a, b, c, n, e, |ix, iy, z0, z1| {
+            entries.push(Entry { tile: iy * n + ix, tri: id as u32, z0: z0 - margin, z1: z1 + margin });
+        });
+    }
+
+    // Counting sort by tile; stable, so each tile's entries stay in triangle-id order.
+    s.tile_start.clear();
+    s.tile_start.resize(n2 + 1, 0);
+    for en in &s.entries {
+        s.tile_start[en.tile as usize + 1] += 1;
+    }
+    for i in 0..n2 {
+        s.tile_start[i + 1] += s.tile_start[i];
+    }
+    s.sorted.clear();
+    s.sorted.resize(s.entries.len(), Entry { tile: 0, tri: 0, z0: 0.0, z1: 0.0 });
+    {
+        let mut cursor = s.tile_start.clone();
+        for en in &s.entries {
+            let slot = &mut cursor[en.tile as usize];
+            s.sorted[*slot as usize] = *en;
+            *slot += 1;
+        }
+    }
+
+    let mut out = DirectionData {
+        tiles: Vec::with_capacity(n2),
+        bounds: Vec::with_capacity(n2 + 1),
+        ids: Vec::with_capacity(s.entries.len() + s.entries.len() / 2),
+        stats: StatisticsRecord::zeroed_record(),
+    };
+    out.stats.tile_count = n2 as u64;
+    let z_step = 2.0 * r / Z_LEVELS as f64;
+    let mut first_leaf: u64 = 0;
+    for tile in 0..n2 {
+        let entries = &s.sorted[s.tile_start[tile] as usize..s.tile_start[tile + 1] as usize];
+        if first_leaf > u32::MAX as u64 {
+            return Err(BakeError::DirectionTooLarge { direction: j, count: first_leaf, what: "leaves" });
+        }
+        if entries.is_empty() {
+            out.tiles.push(TileRecord::empty(first_leaf as u32));
+            out.bounds.push(out.ids.len() as u32);
+            out.stats.empty_tiles += 1;
+            first_leaf += 1;
+            continue;
+        }
+        let (zmin, zmax) =
+            entries.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), en| (a.min(en.z0), b.max(en.z1)));
+        // Quantise outward; a non-empty tile has z_lo < z_hi.
+        let q_lo = (((zmin + r) / z_step).floor().max(0.0) as u32).min(Z_LEVELS - 1);
+        let q_hi = (((zmax + r) / z_step).ceil() as u32).clamp(q_lo + 1, Z_LEVELS);
+        let z0 = -r + q_lo as f64 * z_step;
+        let z1 = -r + q_hi as f64 * z_step;
+        let depth = params.depth.depth_for(entries.len() as u64);
+        let count = 1usize << depth;
+        let h = (z1 - z0) / count as f64;
+        let leaf_of = |z: f64| (((z - z0) / h).floor() as i64).clamp(0, count as i64 - 1) as usize;
+
+        // Push each triangle to the leaves its (clipped, grown) z range overlaps: count, then fill.
+        s.leaf_fill.clear();
+        s.leaf_fill.resize(count + 1, 0);
+        for en in entries {
+            for k in leaf_of(en.z0)..=leaf_of(en.z1) {
+                s.leaf_fill[k + 1] += 1;
+            }
+        }
+        for k in 0..count {
+            s.leaf_fill[k + 1] += s.leaf_fill[k];
+        }
+        let base = out.ids.len();
+        for k in 0..count {
+            out.bounds.push((base + s.leaf_fill[k] as usize) as u32);
+        }
+        out.ids.resize(base + s.leaf_fill[count] as usize, 0);
+        for en in entries {
+            for k in leaf_of(en.z0)..=leaf_of(en.z1) {
+                out.ids[base + s.leaf_fill[k] as usize] = en.tri;
+                s.leaf_fill[k] += 1;
+            }
+        }
+        if out.ids.len() as u64 > u32::MAX as u64 {
+            return Err(BakeError::DirectionTooLarge {
+                direction: j,
+                count: out.ids.len() as u64,
+                what: "triangle ids",
+            });
+        }
+        out.tiles.push(TileRecord {
+            first_leaf: first_leaf as u32,
+            z_lo: q_lo as u16,
+            z_hi: q_hi as u16,
+            depth: depth as u8,
+            reserved: [0; 3],
+        });
+        first_leaf += count as u64;
+        out.stats.tile_triangle_sum += entries.len() as u64;
+        out.stats.max_tile_triangles = out.stats.max_tile_triangles.max(entries.len() as u32);
+        out.stats.max_depth_used = out.stats.max_depth_used.max(depth);
+        out.stats.depth_histogram[depth as usize] += 1;
+    }
+    if first_leaf > u32::MAX as u64 {
+        return Err(BakeError::DirectionTooLarge { direction: j, count: first_leaf, what: "leaves" });
+    }
+    out.bounds.push(out.ids.len() as u32);
+    out.stats.leaf_count = first_leaf;
+    out.stats.id_count = out.ids.len() as u64;
+    Ok(out)
+}
+
+/// Adds one direction's statistics into the field's.
+fn merge_stats(total: &mut StatisticsRecord, d: &StatisticsRecord) {
+    total.tile_count += d.tile_count;
+    total.empty_tiles += d.empty_tiles;
+    total.tile_triangle_sum += d.tile_triangle_sum;
+    total.max_tile_triangles = total.max_tile_triangles.max(d.max_tile_triangles);
+    total.max_depth_used = total.max_depth_used.max(d.max_depth_used);
+    total.leaf_count += d.leaf_count;
+    total.id_count += d.id_count;
+    for (a, b) in total.depth_histogram.iter_mut().zip(&d.depth_histogram) {
+        *a += b;
+    }
+}
+
+/// What a bake produced.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct BakeSummary {
+    pub output: PathBuf,
+    pub triangles: u64,
+    pub dropped_degenerate: u64,
+    pub directions: u32,
+    pub lattice_n: u32,
+    pub tile_resolution: u32,
+    pub leaf_size: u32,
+    pub max_depth: u32,
+    pub automatic: bool,
+    pub choice: String,
+    pub estimated_bytes: Option<u64>,
+    pub bytes: u64,
+    pub seconds: f64,
+    pub content_hash: String,
+    pub input_hash: String,
+    pub statistics: Statistics,
+}
+
+/// Human-facing digest of STATISTICS.
+#[derive(Clone, Debug, serde::Serialize, PartialEq)]
+pub struct Statistics {
+    pub tiles: u64,
+    pub empty_tile_share: f64,
+    pub mean_triangles_per_tile: f64,
+    pub mean_triangles_per_nonempty_tile: f64,
+    pub max_triangles_per_tile: u32,
+    pub max_depth_used: u32,
+    pub mean_depth_nonempty: f64,
+    pub depth_histogram: Vec<u64>,
+    pub triangle_ids: u64,
+    pub leaves: u64,
+}
+
+impl Statistics {
+    pub fn from_record(s: &StatisticsRecord) -> Self {
+        let nonempty = s.tile_count - s.empty_tiles;
+        let used = (s.max_depth_used as usize + 1).min(32);
+        let depth_sum: u64 = s.depth_histogram.iter().enumerate().map(|(d, c)| d as u64 * c).sum();
+        let ratio = |a: u64, b: u64| if b == 0 { 0.0 } else { a as f64 / b as f64 };
+        Statistics {
+            tiles: s.tile_count,
+            empty_tile_share: ratio(s.empty_tiles, s.tile_count),
+            mean_triangles_per_tile: ratio(s.tile_triangle_sum, s.tile_count),
+            mean_triangles_per_nonempty_tile: ratio(s.tile_triangle_sum, nonempty),
+            max_triangles_per_tile: s.max_tile_triangles,
+            max_depth_used: s.max_depth_used,
+            mean_depth_nonempty: ratio(depth_sum, nonempty),
+            depth_histogram: s.depth_histogram[..used].to_vec(),
+            triangle_ids: s.id_count,
+            leaves: s.leaf_count,
+        }
+    }
+}
+
+/// The input hash of `formats/vlf.md` §3.2.
+pub fn input_hash(scene: &Scene, request: &Request) -> [u8; 32] {
+    let mut h = blake3::Hasher::new();
+    h.update(b"VLF-INPUT\0");
+    h.update(&VERSION_MAJOR.to_le_bytes());
+    h.update(&BAKER_REVISION.to_le_bytes());
+    h.update(bytemuck::bytes_of(request));
+    for bytes in scene_sections(scene) {
+        h.update(&(bytes.len() as u64).to_le_bytes());
+        h.update(bytes);
+    }
+    *h.finalize().as_bytes()
+}
+
+/// Raw bytes of TRIANGLES, PROVENANCE, SOURCES, INPUTS, STRINGS, in that order.
+fn scene_sections(scene: &Scene) -> [&[u8]; 5] {
+    [
+        bytemuck::cast_slice(&scene.triangles),
+        bytemuck::cast_slice(&scene.provenance),
+        bytemuck::cast_slice(&scene.sources),
+        bytemuck::cast_slice(&scene.inputs),
+        &scene.strings,
+    ]
+}
+
+/// A section spilled to an anonymous temporary file while it is produced.
+struct Spill {
+    writer: HashingWriter<BufWriter<File>>,
+}
+
+impl Spill {
+    fn new(dir: &Path) -> io::Result<Spill> {
+        Ok(Spill { writer: HashingWriter::new(BufWriter::with_capacity(1 << 20, tempfile::tempfile_in(dir)?)) })
+    }
+
+    fn finish(self) -> io::Result<(File, u64, [u8; 32])> {
+        let (buf, len, hash) = self.writer.finish()?;
+        let mut file = buf.into_inner().map_err(|e| e.into_error())?;
+        file.rewind()?;
+        Ok((file, len, hash))
+    }
+}
+
+/// Bakes `scene` with the chosen `choice` into the field file `output`, atomically.
+pub fn bake_to_path(
+    prep: &Prepared<'_>,
+    choice: &Choice,
+    request: &Request,
+    output: &Path,
+    progress: &dyn Progress,
+) -> Result<BakeSummary, BakeError> {
+    let start = Instant::now();
+    let params = &choice.params;
+    let scene = prep.scene;
+    let dir = match output.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let io_err = |source: io::Error| BakeError::Io { path: output.to_path_buf(), source };
+
+    let lattice = Lattice::new(params.lattice_n);
+    let directions = lattice.directions();
+    let rotations: Vec<[f64; 9]> = directions.iter().map(|&d| frame(d)).collect();
+    let dir_records: Vec<[f32; 4]> = directions.iter().map(|d| [d[0] as f32, d[1] as f32, d[2] as f32, 0.0]).collect();
+    let lookup = lattice.lookup_table();
+
+    let mut tiles = Spill::new(&dir).map_err(io_err)?;
+    let mut bounds = Spill::new(&dir).map_err(io_err)?;
+    let mut ids = Spill::new(&dir).map_err(io_err)?;
+    let mut beams = Vec::with_capacity(directions.len());
+    let mut stats = StatisticsRecord::zeroed_record();
+    let (mut leaf_base, mut id_base) = (0u64, 0u64);
+
+    let l = directions.len();
+    progress.begin("baking directions", l as u64);
+    let chunk = (rayon::current_num_threads() * 4).max(8);
+    for chunk_start in (0..l).step_by(chunk) {
+        let range = chunk_start..(chunk_start + chunk).min(l);
+        let baked: Vec<Result<DirectionData, BakeError>> = range
+            .into_par_iter()
+            .map_init(Scratch::default, |s, j| {
+                let d = bake_direction(prep, params, &rotations[j], j, s);
+                progress.advance(1);
+                d
+            })
+            .collect();
+        for d in baked {
+            let d = d?;
+            tiles.writer.write_all(bytemuck::cast_slice(&d.tiles)).map_err(io_err)?;
+            bounds.writer.write_all(bytemuck::cast_slice(&d.bounds)).map_err(io_err)?;
+            ids.writer.write_all(bytemuck::cast_slice(&d.ids)).map_err(io_err)?;
+            let leaf_count = d.bounds.len() as u64 - 1;
+            beams.push(BeamRecord { leaf_base, leaf_count, id_base, id_count: d.ids.len() as u64 });
+            leaf_base += leaf_count + 1;
+            id_base += d.ids.len() as u64;
+            merge_stats(&mut stats, &d.stats);
+        }
+    }
+    progress.end();
+
+    let scene_record = SceneRecord {
+        center: prep.center,
+        radius: prep.radius,
+        aabb_min: prep.aabb.0,
+        aabb_max: prep.aabb.1,
+        triangle_count: scene.triangles.len() as u64,
+        source_count: scene.sources.len() as u32,
+        input_count: scene.inputs.len() as u32,
+        dropped_degenerate: scene.report.dropped_degenerate,
+        reserved: [0; 3],
+    };
+    let params_record = ParamsRecord {
+        lattice_n: params.lattice_n,
+        direction_count: l as u32,
+        tile_resolution: params.tiles,
+        leaf_size: params.depth.leaf_size,
+        max_depth: params.depth.max_depth,
+        requested_directions: request.requested_directions,
+        requested_tiles: request.requested_tiles,
+        reserved0: 0,
+        max_bytes: request.max_bytes,
+        margin: params.margin,
+        max_bytes_per_triangle: request.max_bytes_per_triangle,
+        reserved1: 0,
+    };
+    let hash = input_hash(scene, request);
+
+    let (mut tiles_file, tiles_len, tiles_hash) = tiles.finish().map_err(io_err)?;
+    let (mut bounds_file, bounds_len, bounds_hash) = bounds.finish().map_err(io_err)?;
+    let (mut ids_file, ids_len, ids_hash) = ids.finish().map_err(io_err)?;
+    let [tri_bytes, prov_bytes, src_bytes, input_bytes, string_bytes] = scene_sections(scene);
+    fn stream(kind: SectionKind, reader: &mut File, length: u64, raw_hash: [u8; 32]) -> SectionPayload<'_> {
+        SectionPayload {
+            kind: kind as u32,
+            element_size: kind.element_size(),
+            payload: Payload::Stream { reader, length, raw_hash },
+        }
+    }
+    let mut sections = vec![
+        SectionPayload::bytes(SectionKind::Scene, bytemuck::bytes_of(&scene_record)),
+        SectionPayload::bytes(SectionKind::Params, bytemuck::bytes_of(&params_record)),
+        SectionPayload::bytes(SectionKind::Directions, bytemuck::cast_slice(&dir_records)),
+        SectionPayload::bytes(SectionKind::Rotations, bytemuck::cast_slice(&rotations)),
+        SectionPayload::bytes(SectionKind::Lookup, bytemuck::cast_slice(&lookup)),
+        SectionPayload::bytes(SectionKind::Beams, bytemuck::cast_slice(&beams)),
+        stream(SectionKind::Tiles, &mut tiles_file, tiles_len, tiles_hash),
+        stream(SectionKind::LeafBounds, &mut bounds_file, bounds_len, bounds_hash),
+        stream(SectionKind::TriangleIds, &mut ids_file, ids_len, ids_hash),
+        SectionPayload::bytes(SectionKind::Triangles, tri_bytes),
+        SectionPayload::bytes(SectionKind::Provenance, prov_bytes),
+        SectionPayload::bytes(SectionKind::Sources, src_bytes),
+        SectionPayload::bytes(SectionKind::Inputs, input_bytes),
+        SectionPayload::bytes(SectionKind::Strings, string_bytes),
+        SectionPayload::bytes(SectionKind::Statistics, bytemuck::bytes_of(&stats)),
+    ];
+
+    progress.begin("writing", 1);
+    let header = write_atomically(output, &dir, |w| vlf_format::write_field(w, hash, &mut sections)).map_err(io_err)?;
+    progress.end();
+
+    Ok(BakeSummary {
+        output: output.to_path_buf(),
+        triangles: scene.triangles.len() as u64,
+        dropped_degenerate: scene.report.dropped_degenerate,
+        directions: l as u32,
+        lattice_n: params.lattice_n,
+        tile_resolution: params.tiles,
+        leaf_size: params.depth.leaf_size,
+        max_depth: params.depth.max_depth,
+        automatic: choice.automatic,
+        choice: choice.reason.clone(),
+        estimated_bytes: choice.estimated_bytes,
+        bytes: header.file_length,
+        seconds: start.elapsed().as_secs_f64(),
+        content_hash: vlf_format::hex(&header.content_hash),
+        input_hash: vlf_format::hex(&header.input_hash),
+        statistics: Statistics::from_record(&stats),
+    })
+}
+
+/// Writes a file through `write` into a temporary file next to `path`, flushes and syncs it, and
+/// renames it over `path`. A failure removes the temporary file; a crash leaves `path` untouched.
+pub fn write_atomically<T>(
+    path: &Path,
+    dir: &Path,
+    write: impl FnOnce(&mut BufWriter<File>) -> io::Result<T>,
+) -> io::Result<T> {
+    let name = path.file_name().map_or("field".into(), |n| n.to_string_lossy().into_owned());
+    let tmp = tempfile::Builder::new().prefix(&format!(".{name}.")).suffix(".tmp").tempfile_in(dir)?;
+    let (file, tmp_path) = tmp.into_parts();
+    let mut w = BufWriter::with_capacity(1 << 20, file);
+    let value = write(&mut w)?;
+    let file = w.into_inner().map_err(|e| e.into_error())?;
+    file.sync_all()?;
+    tmp_path.persist(path).map_err(|e| e.error)?;
+    // Make the rename itself durable.
+    if let Ok(d) = File::open(dir) {
+        let _ = d.sync_all();
+    }
+    Ok(value)
+}
+
+impl DepthPolicy {
+    /// The depth of a tile with `m` distinct triangles (`formats/vlf.md` §6.3).
+    pub fn depth_for(&self, m: u64) -> u32 {
+        let mut depth = 0;
+        while depth < self.max_depth && (self.leaf_size as u64) << depth < m {
+            depth += 1;
+        }
+        depth
+    }
+}
+
+/// Re-exported for the parameter chooser's size estimates.
+pub(crate) fn sample_direction_bytes(
+    prep: &Prepared<'_>,
+    params: &Params,
+    samples: usize,
+) -> Result<(u64, StatisticsRecord), BakeError> {
+    let lattice = Lattice::new(params.lattice_n);
+    let dirs = lattice.directions();
+    let l = dirs.len();
+    let picks: Vec<usize> = (0..samples.min(l))
+        .map(|i| (i * l) / samples.min(l) + (l / samples.min(l)) / 2)
+        .map(|j| j.min(l - 1))
+        .collect();
+    let results: Vec<Result<DirectionData, BakeError>> = picks
+        .par_iter()
+        .map_init(Scratch::default, |s, &j| bake_direction(prep, params, &frame(dirs[j]), j, s))
+        .collect();
+    let mut bytes = 0;
+    let mut stats = StatisticsRecord::zeroed_record();
+    for r in results {
+        let d = r?;
+        bytes += d.bytes();
+        merge_stats(&mut stats, &d.stats);
+    }
+    Ok((bytes / picks.len() as u64, stats))
+}

@@ -1,0 +1,530 @@
+//! glTF 2.0 import (`.gltf` with external or `data:` buffers, and `.glb`) through the `gltf` crate.
+//!
+//! The scene imported is the document's default scene, else its first scene, else (no scenes) every
+//! root node. Nodes are walked depth-first in document order, composing transforms in f64; each
+//! (node, mesh primitive) pair is one source, and its positions are transformed to world space in
+//! f64 and rounded to f32. Triangle lists, strips and fans are imported; point and line primitives
+//! are skipped and counted. Images are never loaded.
+//!
+//! The crate is used defensively, because its happy path trusts the file: its validation indexes
+//! the POSITION accessor without a bounds check, its accessor reader computes byte ranges with
+//! unchecked arithmetic and asserts element sizes, and it refuses any `extensionsRequired` entry
+//! (no extension features are enabled). So this module inspects the raw JSON for extensions first,
+//! runs the validation itself (tolerating what does not matter for geometry), loads the buffers
+//! itself (naming a missing file), and checks every accessor it reads against its buffer view and
+//! buffer before handing it to the reader.
+
+use crate::scene::{ImportError, SceneBuilder, SourceDesc};
+use ::gltf as gl;
+use gl::accessor::{DataType, Dimensions};
+use gl::json::validation::Validate;
+use gl::mesh::Mode;
+use serde_json::Value;
+use std::borrow::Cow;
+use std::path::{Path, PathBuf};
+use vlf_format::{NO_INDEX, source_kind};
+
+/// Column-major 4×4 matrix, `m[column][row]`, like glTF.
+type Mat4 = [[f64; 4]; 4];
+
+const IDENTITY: Mat4 = [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]];
+
+/// A sparse accessor without a buffer view expands `count` zeros from a few bytes; refuse counts
+/// beyond this rather than allocate whatever a hostile file asks for.
+const SPARSE_ONLY_MAX_COUNT: usize = 1 << 24;
+
+/// Whether a required extension leaves geometry alone (materials, textures, lights, metadata), so
+/// that the triangles can be imported without understanding it.
+fn geometry_neutral(extension: &str) -> bool {
+    ["KHR_materials_", "EXT_materials_", "KHR_texture_", "EXT_texture_", "MSFT_texture_"]
+        .iter()
+        .any(|prefix| extension.starts_with(prefix))
+        || matches!(extension, "KHR_lights_punctual" | "EXT_lights_image_based" | "KHR_xmp_json_ld" | "KHR_xmp")
+}
+
+/// Mesh compression carried by a primitive: its triangles live in a compressed stream.
+const PRIMITIVE_COMPRESSION: &str = "KHR_draco_mesh_compression";
+
+struct Ctx<'p> {
+    path: &'p Path,
+    input: u32,
+}
+
+impl Ctx<'_> {
+    fn err(&self, message: String) -> ImportError {
+        ImportError::Gltf { path: self.path.to_path_buf(), message }
+    }
+
+    fn warn(&self, builder: &mut SceneBuilder, message: String) {
+        builder.report_mut().warnings.push(format!("{}: {message}", self.path.display()));
+    }
+}
+
+/// Imports the glTF or GLB file `bytes` (read from `path`) as input `input`.
+pub(super) fn import(builder: &mut SceneBuilder, input: u32, path: &Path, bytes: &[u8]) -> Result<(), ImportError> {
+    let ctx = Ctx { path, input };
+
+    // The raw JSON, for what the typed document drops (extensions on primitives and buffer views).
+    let json: Cow<[u8]> = if bytes.starts_with(b"glTF") {
+        gl::Glb::from_slice(bytes).map_err(|e| ctx.err(format!("not a valid GLB container: {e}")))?.json
+    } else {
+        Cow::Borrowed(bytes)
+    };
+    let raw: Value = serde_json::from_slice(&json).map_err(|e| ctx.err(format!("the JSON does not parse: {e}")))?;
+    check_extensions(&ctx, &raw)?;
+
+    let gl::Gltf { document, blob } =
+        gl::Gltf::from_slice_without_validation(bytes).map_err(|e| ctx.err(format!("{e}")))?;
+    validate(&ctx, document.as_json())?;
+    let buffers = load_buffers(&ctx, &document, blob)?;
+
+    if let Some(nodes) = raw.get("nodes").and_then(Value::as_array) {
+        for (i, node) in nodes.iter().enumerate() {
+            if has_extension(node, "EXT_mesh_gpu_instancing") {
+                ctx.warn(
+                    builder,
+                    format!("node {i} uses EXT_mesh_gpu_instancing (not supported): only the node itself is imported"),
+                );
+            }
+        }
+    }
+
+    // The nodes to import from.
+    let scene_count = document.scenes().len();
+    let roots: Vec<usize> = match document.default_scene().or_else(|| document.scenes().next()) {
+        Some(scene) => {
+            if scene_count > 1 {
+                ctx.warn(
+                    builder,
+                    format!("the document has {scene_count} scenes; only scene {} is imported", scene.index()),
+                );
+            }
+            scene.nodes().map(|n| n.index()).collect()
+        }
+        None => {
+            let mut child = vec![false; document.nodes().len()];
+            for node in document.nodes() {
+                for c in node.children() {
+                    child[c.index()] = true;
+                }
+            }
+            (0..child.len()).filter(|&i| !child[i]).collect()
+        }
+    };
+
+    let nodes: Vec<gl::Node> = document.nodes().collect();
+    let mut visited = vec![false; nodes.len()];
+    let mut mesh_used = vec![false; document.meshes().len()];
+    let mut stack: Vec<(usize, Mat4)> = roots.iter().rev().map(|&i| (i, IDENTITY)).collect();
+    while let Some((index, parent)) = stack.pop() {
+        let node =
+            nodes.get(index).ok_or_else(|| ctx.err(format!("the scene names node {index}, which does not exist")))?;
+        if std::mem::replace(&mut visited[index], true) {
+            return Err(ctx.err(format!(
+                "node {index} is reached twice: nodes must form trees (a cycle, or a node with two parents)"
+            )));
+        }
+        let world = mul(&parent, &local_matrix(node.transform()));
+        if let Some(mesh) = node.mesh() {
+            mesh_used[mesh.index()] = true;
+            if node.skin().is_some() {
+                ctx.warn(builder, format!("node {index} is skinned; its mesh is imported in its bind pose"));
+            }
+            for primitive in mesh.primitives() {
+                import_primitive(builder, &ctx, &buffers, index, &world, &mesh, &primitive)?;
+            }
+        }
+        let children: Vec<usize> = node.children().map(|c| c.index()).collect();
+        stack.extend(children.into_iter().rev().map(|c| (c, world)));
+    }
+    let unused = mesh_used.iter().filter(|&&u| !u).count();
+    if unused > 0 {
+        ctx.warn(builder, format!("{unused} mesh(es) are not instanced by any node of the imported scene"));
+    }
+    Ok(())
+}
+
+/// Refuses extensions that change how geometry is stored: compression on a primitive, and any
+/// required extension that is not known to leave geometry alone.
+fn check_extensions(ctx: &Ctx, raw: &Value) -> Result<(), ImportError> {
+    let unsupported = |location: String, extension: &str| ImportError::UnsupportedExtension {
+        path: ctx.path.to_path_buf(),
+        location,
+        extension: extension.to_string(),
+    };
+    for (m, p, primitive) in primitives(raw) {
+        if has_extension(primitive, PRIMITIVE_COMPRESSION) {
+            return Err(unsupported(format!("mesh {m} primitive {p}"), PRIMITIVE_COMPRESSION));
+        }
+    }
+    let required = raw.get("extensionsRequired").and_then(Value::as_array).map(Vec::as_slice).unwrap_or_default();
+    for extension in required.iter().filter_map(Value::as_str) {
+        if geometry_neutral(extension) {
+            continue;
+        }
+        // Name the first primitive that uses it, directly or through an accessor or buffer view.
+        let location = primitives(raw)
+            .find(|(_, _, primitive)| {
+                has_extension(primitive, extension)
+                    || primitive_accessors(primitive).any(|a| accessor_has_extension(raw, a, extension))
+            })
+            .map_or_else(|| "document".to_string(), |(m, p, _)| format!("mesh {m} primitive {p}"));
+        return Err(unsupported(location, extension));
+    }
+    Ok(())
+}
+
+/// Every mesh primitive of the raw JSON, as (mesh index, primitive index, primitive).
+fn primitives(raw: &Value) -> impl Iterator<Item = (usize, usize, &Value)> {
+    let meshes = raw.get("meshes").and_then(Value::as_array).map(Vec::as_slice).unwrap_or_default();
+    meshes.iter().enumerate().flat_map(|(m, mesh)| {
+        let list = mesh.get("primitives").and_then(Value::as_array).map(Vec::as_slice).unwrap_or_default();
+        list.iter().enumerate().map(move |(p, primitive)| (m, p, primitive))
+    })
+}
+
+/// The accessor indices a raw primitive reads: its attributes and its indices.
+fn primitive_accessors(primitive: &Value) -> impl Iterator<Item = u64> + '_ {
+    let attributes = primitive.get("attributes").and_then(Value::as_object);
+    attributes.into_iter().flat_map(|a| a.values()).chain(primitive.get("indices")).filter_map(Value::as_u64)
+}
+
+fn accessor_has_extension(raw: &Value, accessor: u64, extension: &str) -> bool {
+    let element = |array: &str, i: u64| raw.get(array).and_then(Value::as_array).and_then(|a| a.get(i as usize));
+    let Some(acc) = element("accessors", accessor) else { return false };
+    has_extension(acc, extension)
+        || acc
+            .get("bufferView")
+            .and_then(Value::as_u64)
+            .and_then(|v| element("bufferViews", v))
+            .is_some_and(|view| has_extension(view, extension))
+}
+
+fn has_extension(object: &Value, extension: &str) -> bool {
+    object.get("extensions").and_then(Value::as_object).is_some_and(|e| e.contains_key(extension))
+}
+
+/// The crate's validation, minus what does not matter here: missing or malformed POSITION bounds,
+/// a primitive without POSITION (skipped with a warning), and required extensions (already judged
+/// by [`check_extensions`]).
+fn validate(ctx: &Ctx, root: &gl::json::Root) -> Result<(), ImportError> {
+    use gl::json::validation::Error as V;
+    // The crate's primitive check indexes the POSITION accessor without a bounds check.
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            let attribute_accessors = primitive.attributes.values().map(|i| i.value());
+            if let Some(a) =
+                attribute_accessors.chain(primitive.indices.map(|i| i.value())).find(|&a| a >= root.accessors.len())
+            {
+                return Err(ctx.err(format!(
+                    "mesh {m} primitive {p} reads accessor {a}, but the document has {} accessors",
+                    root.accessors.len()
+                )));
+            }
+        }
+    }
+    let mut problems = Vec::new();
+    root.validate(root, gl::json::Path::new, &mut |path: &dyn Fn() -> gl::json::Path, error: V| {
+        let path = path().0;
+        let ignorable = (error == V::Missing && path.ends_with("attributes[\"POSITION\"]"))
+            || path.ends_with("attributes[\"POSITION\"].min")
+            || path.ends_with("attributes[\"POSITION\"].max")
+            || (error == V::Unsupported && path.starts_with("extensionsRequired"));
+        if !ignorable {
+            problems.push(format!("{path}: {error}"));
+        }
+    });
+    if problems.is_empty() {
+        return Ok(());
+    }
+    let mut message = format!("invalid document: {}", problems.iter().take(3).cloned().collect::<Vec<_>>().join("; "));
+    if problems.len() > 3 {
+        message.push_str(&format!("; and {} more problems", problems.len() - 3));
+    }
+    Err(ctx.err(message))
+}
+
+/// The bytes of every buffer: the GLB binary chunk, a `data:` URI, or a file beside the document.
+fn load_buffers(ctx: &Ctx, document: &gl::Document, mut blob: Option<Vec<u8>>) -> Result<Vec<Vec<u8>>, ImportError> {
+    let base = ctx.path.parent().unwrap_or(Path::new(""));
+    let mut out = Vec::new();
+    for buffer in document.buffers() {
+        let i = buffer.index();
+        let data = match buffer.source() {
+            gl::buffer::Source::Bin => blob
+                .take()
+                .ok_or_else(|| ctx.err(format!("buffer {i} is the GLB binary chunk, but the file has none")))?,
+            source @ gl::buffer::Source::Uri(uri) if uri.starts_with("data:") => {
+                gl::buffer::Data::from_source(source, None)
+                    .map_err(|e| ctx.err(format!("buffer {i}: bad data URI: {e}")))?
+                    .0
+            }
+            gl::buffer::Source::Uri(uri) => {
+                let file = resolve_uri(base, uri).map_err(|why| ctx.err(format!("buffer {i}: URI {uri:?}: {why}")))?;
+                std::fs::read(&file).map_err(|e| {
+                    ctx.err(format!("buffer {i}: cannot read external file {uri:?} ({}): {e}", file.display()))
+                })?
+            }
+        };
+        if data.len() < buffer.length() {
+            return Err(ctx.err(format!(
+                "buffer {i} holds {} bytes, but the document declares byteLength {}",
+                data.len(),
+                buffer.length()
+            )));
+        }
+        out.push(data);
+    }
+    Ok(out)
+}
+
+/// The file a relative (percent-encoded) or `file:` URI names.
+fn resolve_uri(base: &Path, uri: &str) -> Result<PathBuf, String> {
+    let relative = if uri.contains(':') {
+        let Some(rest) = uri.strip_prefix("file://").or_else(|| uri.strip_prefix("file:")) else {
+            return Err("unsupported URI scheme (only relative paths, file: and data: are read)".to_string());
+        };
+        rest
+    } else {
+        uri
+    };
+    let mut bytes = Vec::with_capacity(relative.len());
+    let raw = relative.as_bytes();
+    let mut k = 0;
+    while k < raw.len() {
+        let hex = |b: u8| (b as char).to_digit(16);
+        match (raw[k], raw.get(k + 1).copied().and_then(hex), raw.get(k + 2).copied().and_then(hex)) {
+            (b'%', Some(hi), Some(lo)) => {
+                bytes.push((hi * 16 + lo) as u8);
+                k += 3;
+            }
+            (b, _, _) => {
+                bytes.push(b);
+                k += 1;
+            }
+        }
+    }
+    let decoded = String::from_utf8(bytes).map_err(|_| "percent-decodes to invalid UTF-8".to_string())?;
+    Ok(base.join(decoded))
+}
+
+/// Imports one primitive instanced by node `node`.
+fn import_primitive(
+    builder: &mut SceneBuilder,
+    ctx: &Ctx,
+    buffers: &[Vec<u8>],
+    node: usize,
+    world: &Mat4,
+    mesh: &gl::Mesh,
+    primitive: &gl::Primitive,
+) -> Result<(), ImportError> {
+    let location = format!("mesh {} primitive {}", mesh.index(), primitive.index());
+    let mode = primitive.mode();
+    match mode {
+        Mode::Points => {
+            builder.report_mut().skipped_points += 1;
+            return Ok(());
+        }
+        Mode::Lines | Mode::LineLoop | Mode::LineStrip => {
+            builder.report_mut().skipped_lines += 1;
+            return Ok(());
+        }
+        Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan => {}
+    }
+    let Some(position) = primitive.get(&gl::Semantic::Positions) else {
+        ctx.warn(builder, format!("{location} (node {node}) has no POSITION attribute; skipped"));
+        return Ok(());
+    };
+    if position.data_type() != DataType::F32 || position.dimensions() != Dimensions::Vec3 {
+        return Err(ctx.err(format!(
+            "{location}: POSITION accessor {} holds {:?} of {:?}; only VEC3 of FLOAT is supported",
+            position.index(),
+            position.dimensions(),
+            position.data_type()
+        )));
+    }
+    check_layout(&position, 12, buffers)
+        .map_err(|why| ctx.err(format!("{location}: POSITION accessor {}: {why}", position.index())))?;
+    let index_accessor = primitive.indices();
+    if let Some(ia) = &index_accessor {
+        if ia.dimensions() != Dimensions::Scalar
+            || !matches!(ia.data_type(), DataType::U8 | DataType::U16 | DataType::U32)
+        {
+            return Err(ctx.err(format!(
+                "{location}: index accessor {} holds {:?} of {:?}; indices must be SCALAR unsigned integers",
+                ia.index(),
+                ia.dimensions(),
+                ia.data_type()
+            )));
+        }
+        check_layout(ia, ia.data_type().size(), buffers)
+            .map_err(|why| ctx.err(format!("{location}: index accessor {}: {why}", ia.index())))?;
+    }
+
+    let reader = primitive.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
+    let positions: Vec<[f32; 3]> = if position.count() == 0 {
+        Vec::new()
+    } else {
+        let read = reader.read_positions().ok_or_else(|| ctx.err(format!("{location}: cannot read POSITION")))?;
+        read.map(|p| transform_point(world, p)).collect()
+    };
+    let indices: Option<Vec<u32>> = match &index_accessor {
+        None => None,
+        Some(ia) if ia.count() == 0 => Some(Vec::new()),
+        Some(_) => {
+            let read = reader.read_indices().ok_or_else(|| ctx.err(format!("{location}: cannot read the indices")))?;
+            Some(read.into_u32().collect())
+        }
+    };
+    if let Some(&bad) = indices.as_deref().unwrap_or_default().iter().find(|&&i| i as usize >= positions.len()) {
+        return Err(ImportError::IndexOutOfRange {
+            path: ctx.path.to_path_buf(),
+            location,
+            index: bad as u64,
+            count: positions.len() as u64,
+        });
+    }
+    let n = indices.as_ref().map_or(positions.len(), Vec::len);
+    let vertex = |k: usize| positions[indices.as_ref().map_or(k, |ix| ix[k] as usize)];
+    let triangles = match mode {
+        Mode::Triangles => {
+            if n % 3 != 0 {
+                ctx.warn(
+                    builder,
+                    format!("{location}: {n} vertices is not a multiple of 3; the last {} are ignored", n % 3),
+                );
+            }
+            n / 3
+        }
+        _ => n.saturating_sub(2),
+    };
+    if triangles == 0 {
+        return Ok(());
+    }
+    let source = builder.add_source(
+        ctx.input,
+        SourceDesc {
+            kind: source_kind::GLTF_PRIMITIVE,
+            name: mesh.name().unwrap_or("").to_string(),
+            mesh: mesh.index() as u32,
+            primitive: primitive.index() as u32,
+            node: node as u32,
+            material: primitive.material().index().map_or(NO_INDEX, |m| m as u32),
+        },
+    );
+    for t in 0..triangles {
+        // glTF 2.0 §3.7.2.1: strips alternate winding, fans pivot on vertex 0.
+        let corners = match mode {
+            Mode::TriangleStrip if t % 2 == 1 => [t, t + 2, t + 1],
+            Mode::TriangleStrip => [t, t + 1, t + 2],
+            Mode::TriangleFan => [t + 1, t + 2, 0],
+            _ => [3 * t, 3 * t + 1, 3 * t + 2],
+        };
+        builder.push_triangle(source, t as u64, corners.map(vertex))?;
+    }
+    Ok(())
+}
+
+/// Checks that every byte the reader will touch for `accessor` (elements of `element_size` bytes,
+/// plus sparse indices and values) lies inside its buffer view and buffer, with no arithmetic
+/// overflow, so that the crate's unchecked reader cannot panic or misread.
+fn check_layout(accessor: &gl::Accessor, element_size: usize, buffers: &[Vec<u8>]) -> Result<(), String> {
+    let count = accessor.count();
+    match accessor.view() {
+        Some(view) => check_run(&view, accessor.offset(), count, element_size, buffers)?,
+        None if accessor.sparse().is_none() => return Err("it has neither a buffer view nor sparse values".to_string()),
+        None if count > SPARSE_ONLY_MAX_COUNT => {
+            return Err(format!(
+                "a sparse accessor without a buffer view may hold at most {SPARSE_ONLY_MAX_COUNT} elements, not {count}"
+            ));
+        }
+        None => {}
+    }
+    if let Some(sparse) = accessor.sparse() {
+        let n = sparse.count();
+        if n == 0 || n > count {
+            return Err(format!("sparse count {n} must be between 1 and the accessor count {count}"));
+        }
+        let indices = sparse.indices();
+        check_run(&indices.view(), indices.offset(), n, indices.index_type().size(), buffers)
+            .map_err(|why| format!("sparse indices: {why}"))?;
+        let values = sparse.values();
+        check_run(&values.view(), values.offset(), n, element_size, buffers)
+            .map_err(|why| format!("sparse values: {why}"))?;
+    }
+    Ok(())
+}
+
+/// Checks `count` elements of `size` bytes from `offset` in `view` (with its stride).
+fn check_run(
+    view: &gl::buffer::View,
+    offset: usize,
+    count: usize,
+    size: usize,
+    buffers: &[Vec<u8>],
+) -> Result<(), String> {
+    let (v, b) = (view.index(), view.buffer().index());
+    let buffer_len = buffers.get(b).map_or(0, Vec::len);
+    let view_end = view.offset().checked_add(view.length());
+    if view_end.is_none_or(|end| end > buffer_len) {
+        return Err(format!(
+            "buffer view {v} (offset {}, length {}) lies outside buffer {b} ({buffer_len} bytes)",
+            view.offset(),
+            view.length()
+        ));
+    }
+    let stride = view.stride().unwrap_or(size);
+    if stride < size {
+        return Err(format!("buffer view {v} has byteStride {stride}, less than the element size {size}"));
+    }
+    if count == 0 {
+        return Ok(());
+    }
+    let end = stride.checked_mul(count - 1).and_then(|x| x.checked_add(size)).and_then(|x| x.checked_add(offset));
+    if end.is_none_or(|end| end > view.length()) {
+        return Err(format!(
+            "{count} elements of {size} bytes from byte {offset}, stride {stride}, overrun buffer view {v} ({} B)",
+            view.length()
+        ));
+    }
+    Ok(())
+}
+
+/// A node's local transform as a column-major f64 matrix; a TRS transform is composed in f64
+/// (`T·R·S`, the quaternion used as given).
+fn local_matrix(transform: gl::scene::Transform) -> Mat4 {
+    match transform {
+        gl::scene::Transform::Matrix { matrix } => matrix.map(|column| column.map(f64::from)),
+        gl::scene::Transform::Decomposed { translation, rotation, scale } => {
+            let [x, y, z, w] = rotation.map(f64::from);
+            let [sx, sy, sz] = scale.map(f64::from);
+            let [tx, ty, tz] = translation.map(f64::from);
+            // Rotation matrix, row-major r[row][column].
+            let r = [
+                [1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y - z * w), 2.0 * (x * z + y * w)],
+                [2.0 * (x * y + z * w), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z - x * w)],
+                [2.0 * (x * z - y * w), 2.0 * (y * z + x * w), 1.0 - 2.0 * (x * x + y * y)],
+            ];
+            let s = [sx, sy, sz];
+            let mut m = IDENTITY;
+            for (column, m_column) in m.iter_mut().take(3).enumerate() {
+                for row in 0..3 {
+                    m_column[row] = r[row][column] * s[column];
+                }
+            }
+            m[3] = [tx, ty, tz, 1.0];
+            m
+        }
+    }
+}
+
+/// `a · b` for column-major matrices.
+fn mul(a: &Mat4, b: &Mat4) -> Mat4 {
+    std::array::from_fn(|column| std::array::from_fn(|row| (0..4).map(|k| a[k][row] * b[column][k]).sum()))
+}
+
+/// The affine image of `p` under `m`, computed in f64 and rounded to f32.
+fn transform_point(m: &Mat4, p: [f32; 3]) -> [f32; 3] {
+    let [x, y, z] = p.map(f64::from);
+    std::array::from_fn(|row| (m[0][row] * x + m[1][row] * y + m[2][row] * z + m[3][row]) as f32)
+}

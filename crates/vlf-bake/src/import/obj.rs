@@ -1,0 +1,377 @@
+//! Wavefront OBJ import through `tobj`.
+//!
+//! Every face is fan-triangulated by tobj; point and line elements (`p`, `l`, and `f` with one or
+//! two vertices) are ignored. Each tobj model — an `o` object or `g` group, split again by tobj
+//! wherever `usemtl` changes the material — becomes one source, named after the model.
+//!
+//! tobj trusts its input more than an importer of arbitrary files may: an out-of-range texture or
+//! normal index overflows its arithmetic (a panic in checked builds), its MTL parser panics on a
+//! short colour line, and its errors carry neither a line number nor the offending index. So the
+//! text is checked here first — UTF-8, vertex lines, face indices against the vertices of the file —
+//! and the MTL libraries are read by a small parser of our own that keeps only material names (the
+//! material index is all a source records).
+
+use crate::scene::{ImportError, SceneBuilder, SourceDesc};
+use std::borrow::Cow;
+use std::cell::{Cell, RefCell};
+use std::path::Path;
+use vlf_format::{NO_INDEX, source_kind};
+
+/// The statement keywords of the OBJ format (geometry, grouping, display and free-form).
+#[rustfmt::skip]
+const KEYWORDS: &[&str] = &[
+    "v", "vt", "vn", "vp", "f", "l", "p", "o", "g", "s", "mg", "mtllib", "usemtl", "cstype", "deg", "bmat", "step",
+    "curv", "curv2", "surf", "parm", "trim", "hole", "scrv", "sp", "end", "con", "bevel", "c_interp", "d_interp",
+    "lod", "shadow_obj", "trace_obj", "maplib", "usemap", "call", "csh",
+];
+
+/// Imports the OBJ text `bytes` (read from `path`) as input `input`.
+pub(super) fn import(builder: &mut SceneBuilder, input: u32, path: &Path, bytes: &[u8]) -> Result<(), ImportError> {
+    let err = |message: String| ImportError::Obj { path: path.to_path_buf(), message };
+    let text = std::str::from_utf8(bytes).map_err(|e| {
+        let line = 1 + bytes[..e.valid_up_to()].iter().filter(|&&b| b == b'\n').count();
+        err(format!("not UTF-8 text (invalid byte on line {line}); is this an OBJ file?"))
+    })?;
+    let scan = scan(path, text)?;
+
+    // tobj reads `l` statements as faces (a three-point polyline would become a triangle): blank
+    // them, keeping the line count.
+    let text: Cow<str> = if scan.has_lines {
+        let mut filtered = String::with_capacity(text.len());
+        for line in text.lines() {
+            if line.split_whitespace().next() != Some("l") {
+                filtered.push_str(line);
+            }
+            filtered.push('\n');
+        }
+        Cow::Owned(filtered)
+    } else {
+        Cow::Borrowed(text)
+    };
+
+    let base = path.parent().unwrap_or(Path::new(""));
+    let warnings = RefCell::new(Vec::new());
+    let loaded_libraries = Cell::new(0usize);
+    // tobj's `merging`/`reordering` features (off here, but a workspace crate could unify them
+    // on) add fields whose defaults are what we want.
+    #[allow(clippy::needless_update)]
+    let options = tobj::LoadOptions {
+        single_index: false,
+        triangulate: true,
+        ignore_points: true,
+        ignore_lines: true,
+        ..Default::default()
+    };
+    let (models, materials) =
+        tobj::load_obj_buf(&mut std::io::Cursor::new(text.as_bytes()), &options, |library: &Path| {
+            let file = base.join(library);
+            let loaded = match std::fs::read(&file) {
+                Err(e) => Err(format!("cannot read it ({e})")),
+                Ok(b) => match std::str::from_utf8(&b) {
+                    Err(_) => Err("it is not UTF-8 text".to_string()),
+                    Ok(t) => material_names(t),
+                },
+            };
+            match loaded {
+                Ok(names) => {
+                    loaded_libraries.set(loaded_libraries.get() + 1);
+                    let map = names.iter().enumerate().map(|(i, n)| (n.clone(), i)).collect();
+                    Ok((names.into_iter().map(|name| tobj::Material { name, ..Default::default() }).collect(), map))
+                }
+                Err(why) => {
+                    warnings.borrow_mut().push(format!(
+                        "{}: material library {:?}: {why}; its materials are left unassigned",
+                        path.display(),
+                        library.display().to_string()
+                    ));
+                    Err(tobj::LoadError::OpenFileFailed)
+                }
+            }
+        })
+        .map_err(|e| err(tobj_message(e)))?;
+
+    let mut warnings = warnings.into_inner();
+    let materials = materials.unwrap_or_default();
+    let undefined: Vec<&str> =
+        scan.usemtl.iter().copied().filter(|name| !materials.iter().any(|m| m.name == *name)).collect();
+    if !undefined.is_empty() {
+        if loaded_libraries.get() == 0 {
+            if scan.mtllibs == 0 {
+                warnings.push(format!(
+                    "{}: usemtl names {} material(s) but the file declares no material library (mtllib)",
+                    path.display(),
+                    undefined.len()
+                ));
+            }
+        } else {
+            warnings.push(format!(
+                "{}: material(s) not defined by any material library: {}",
+                path.display(),
+                quoted_list(&undefined)
+            ));
+        }
+    }
+    builder.report_mut().warnings.extend(warnings);
+
+    for (model_index, model) in models.iter().enumerate() {
+        let mesh = &model.mesh;
+        if mesh.indices.is_empty() {
+            continue;
+        }
+        let vertex_count = mesh.positions.len() / 3;
+        if let Some(&bad) = mesh.indices.iter().find(|&&i| i as usize >= vertex_count) {
+            return Err(ImportError::IndexOutOfRange {
+                path: path.to_path_buf(),
+                location: format!("object {:?}", model.name),
+                index: bad as u64,
+                count: vertex_count as u64,
+            });
+        }
+        let source = builder.add_source(
+            input,
+            SourceDesc {
+                kind: source_kind::OBJ_OBJECT,
+                name: model.name.clone(),
+                mesh: model_index as u32,
+                primitive: 0,
+                node: NO_INDEX,
+                material: mesh.material_id.map_or(NO_INDEX, |m| m as u32),
+            },
+        );
+        let p = &mesh.positions;
+        for (t, tri) in mesh.indices.chunks_exact(3).enumerate() {
+            let v = [tri[0], tri[1], tri[2]].map(|i| {
+                let i = i as usize * 3;
+                [p[i], p[i + 1], p[i + 2]]
+            });
+            builder.push_triangle(source, t as u64, v)?;
+        }
+    }
+    Ok(())
+}
+
+/// Whether `bytes` (a file of unknown extension) looks like OBJ text: every statement in the first
+/// 64 KiB has an OBJ keyword, and there is at least one vertex.
+pub(super) fn looks_like_obj(bytes: &[u8]) -> bool {
+    let truncated = bytes.len() > 64 * 1024;
+    let sample = &bytes[..bytes.len().min(64 * 1024)];
+    let text = match std::str::from_utf8(sample) {
+        Ok(t) => t,
+        // A character cut at the end of the sample.
+        Err(e) if truncated && e.error_len().is_none() => std::str::from_utf8(&sample[..e.valid_up_to()]).unwrap_or(""),
+        Err(_) => return false,
+    };
+    let mut lines: Vec<&str> = text.lines().collect();
+    if truncated {
+        lines.pop();
+    }
+    let mut vertices = false;
+    for line in lines {
+        let Some(word) = line.split_whitespace().next() else { continue };
+        if word.starts_with('#') {
+            continue;
+        }
+        if !KEYWORDS.contains(&word) {
+            return false;
+        }
+        vertices |= word == "v";
+    }
+    vertices
+}
+
+/// What the checking pass learned about the text.
+struct Scan<'a> {
+    /// There are `l` statements (removed before tobj sees the text).
+    has_lines: bool,
+    /// Distinct material names given to `usemtl`, in order.
+    usemtl: Vec<&'a str>,
+    /// Number of `mtllib` statements.
+    mtllibs: usize,
+}
+
+/// Checks what tobj would accept silently, report without a line number, or panic on: vertex
+/// lines, face index syntax and ranges, `usemtl` names. Also tells a text file that is not OBJ at
+/// all (no statement of the format) from an empty one.
+fn scan<'a>(path: &Path, text: &'a str) -> Result<Scan<'a>, ImportError> {
+    let err = |line: usize, message: String| ImportError::Obj {
+        path: path.to_path_buf(),
+        message: format!("line {line}: {message}"),
+    };
+
+    // Pass 1: totals (a face may name any vertex of the file by a positive index).
+    let (mut v_total, mut vt_total, mut vn_total) = (0i64, 0i64, 0i64);
+    let mut statements = 0usize;
+    let mut first_foreign: Option<(usize, &str)> = None;
+    for (n, line) in text.lines().enumerate() {
+        let Some(word) = line.split_whitespace().next() else { continue };
+        match word {
+            "v" => v_total += 1,
+            "vt" => vt_total += 1,
+            "vn" => vn_total += 1,
+            _ => {}
+        }
+        if word.starts_with('#') {
+            continue;
+        }
+        if KEYWORDS.contains(&word) {
+            statements += 1;
+        } else if first_foreign.is_none() {
+            first_foreign = Some((n + 1, line.trim()));
+        }
+    }
+    if let (0, Some((line, content))) = (statements, first_foreign) {
+        let shown: String = content.chars().take(40).collect();
+        return Err(ImportError::Obj {
+            path: path.to_path_buf(),
+            message: format!(
+                "no OBJ statement (v, f, o, g, ...) in the file; line {line} reads {shown:?}: this is not an OBJ mesh"
+            ),
+        });
+    }
+
+    // Pass 2: statement by statement.
+    let mut scan = Scan { has_lines: false, usemtl: Vec::new(), mtllibs: 0 };
+    let (mut v_seen, mut vt_seen, mut vn_seen) = (0i64, 0i64, 0i64);
+    let mut object = "unnamed_object";
+    for (n, line) in text.lines().enumerate() {
+        let n = n + 1;
+        let mut words = line.split_whitespace();
+        let Some(word) = words.next() else { continue };
+        match word {
+            "v" => {
+                v_seen += 1;
+                let numbers: Vec<&str> = words.collect();
+                let parse = |s: &str| s.parse::<f32>().ok();
+                if numbers.len() < 3 || numbers[..3].iter().any(|s| parse(s).is_none()) {
+                    return Err(err(n, format!("a vertex needs three numbers x y z: {:?}", line.trim())));
+                }
+                match numbers.len() {
+                    3 => {}
+                    4 => match parse(numbers[3]) {
+                        None => return Err(err(n, format!("vertex weight w is not a number: {:?}", line.trim()))),
+                        Some(0.0) => return Err(err(n, "vertex weight w is zero".to_string())),
+                        Some(_) => {}
+                    },
+                    6 if numbers[3..].iter().all(|s| parse(s).is_some()) => {}
+                    _ => {
+                        return Err(err(
+                            n,
+                            format!("a vertex line holds x y z, x y z w or x y z r g b; found {:?}", line.trim()),
+                        ));
+                    }
+                }
+            }
+            "vt" => vt_seen += 1,
+            "vn" => vn_seen += 1,
+            "l" => scan.has_lines = true,
+            "o" | "g" => {
+                // As tobj names the model: the rest of the line after the keyword's first character.
+                let first = line.chars().next().map_or(0, char::len_utf8);
+                object = line[first..].trim();
+                if object.is_empty() {
+                    object = "unnamed_object";
+                }
+            }
+            "mtllib" => scan.mtllibs += 1,
+            "usemtl" => {
+                let name = line.split_once(' ').unwrap_or_default().1.trim();
+                if name.is_empty() {
+                    return Err(err(n, "usemtl without a material name".to_string()));
+                }
+                if !scan.usemtl.contains(&name) {
+                    scan.usemtl.push(name);
+                }
+            }
+            "f" => {
+                let mut corners = 0;
+                for (k, token) in words.enumerate() {
+                    corners += 1;
+                    let parts: Vec<&str> = token.split('/').collect();
+                    let bad = || err(n, format!("face vertex {} is malformed: {token:?}", k + 1));
+                    if parts.len() > 3 || parts[0].is_empty() {
+                        return Err(bad());
+                    }
+                    let mut index = [None; 3];
+                    for (slot, part) in parts.iter().enumerate() {
+                        if !part.is_empty() {
+                            index[slot] = Some(part.parse::<i64>().map_err(|_| bad())?);
+                        }
+                    }
+                    let Some(iv) = index[0] else { return Err(bad()) };
+                    if iv > v_total || iv == 0 {
+                        return Err(ImportError::IndexOutOfRange {
+                            path: path.to_path_buf(),
+                            location: format!("line {n}, face of object {object:?}"),
+                            index: iv as u64,
+                            count: v_total as u64,
+                        });
+                    }
+                    if iv < 0 && v_seen + iv < 0 {
+                        return Err(err(
+                            n,
+                            format!("relative vertex index {iv} reaches before the first vertex ({v_seen} precede it)"),
+                        ));
+                    }
+                    // tobj only looks at texture and normal indices when the file has some.
+                    for (slot, what, total, seen) in
+                        [(1, "texture coordinate", vt_total, vt_seen), (2, "normal", vn_total, vn_seen)]
+                    {
+                        let Some(i) = index[slot] else { continue };
+                        if total > 0 && (i == 0 || i > total || (i < 0 && seen + i < 0)) {
+                            return Err(err(
+                                n,
+                                format!("{what} index {i} is out of range (the file has {total} {what}s)"),
+                            ));
+                        }
+                    }
+                }
+                if corners == 0 {
+                    return Err(err(n, "a face without vertices".to_string()));
+                }
+            }
+            _ => {}
+        }
+    }
+    Ok(scan)
+}
+
+/// The material names of an MTL library, in order (tobj gives a duplicated name the later index).
+fn material_names(text: &str) -> Result<Vec<String>, String> {
+    let mut names = Vec::new();
+    for (n, line) in text.lines().enumerate() {
+        let line = line.trim();
+        if line.split_whitespace().next() == Some("newmtl") {
+            let name = line["newmtl".len()..].trim();
+            if name.is_empty() {
+                return Err(format!("line {}: newmtl without a name", n + 1));
+            }
+            names.push(name.to_string());
+        }
+    }
+    Ok(names)
+}
+
+/// tobj's error with what it usually means.
+fn tobj_message(e: tobj::LoadError) -> String {
+    use tobj::LoadError as E;
+    let hint = match e {
+        E::ReadError => "; the file is not UTF-8 text",
+        E::FaceVertexOutOfBounds => "; a face names a vertex that is defined only after the face's object ends",
+        E::FaceColorOutOfBounds => "; vertex colours are given for some vertices but not for all",
+        E::FaceTexCoordOutOfBounds | E::FaceNormalOutOfBounds => {
+            "; a face names a missing texture coordinate or normal"
+        }
+        E::MaterialParseError => "; a usemtl line has no material name",
+        _ => "",
+    };
+    format!("{e}{hint}")
+}
+
+fn quoted_list(names: &[&str]) -> String {
+    const SHOWN: usize = 5;
+    let mut s = names.iter().take(SHOWN).map(|n| format!("{n:?}")).collect::<Vec<_>>().join(", ");
+    if names.len() > SHOWN {
+        s.push_str(&format!(" and {} more", names.len() - SHOWN));
+    }
+    s
+}

@@ -1,0 +1,588 @@
+//! `vlf-bake`: bake triangle meshes into visibility-field files, inspect and verify them, and
+//! trace batches of rays against them. A thin layer over the `vlf_bake` and `vlf_runtime`
+//! libraries.
+//!
+//! Exit codes: 0 success; 1 the command failed (one line on standard error says why); 2 the
+//! command line was invalid. A closed output pipe (`vlf-bake dump f | head`) counts as success.
+
+use anyhow::{Context, Result, bail};
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use indicatif::{ProgressBar, ProgressStyle};
+use std::io::{IsTerminal, Write};
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::sync::Mutex;
+use std::time::Instant;
+use vlf_bake::params::{DEFAULT_LEAF_SIZE, DEFAULT_MAX_DEPTH, human_bytes};
+use vlf_bake::{BakeConfig, DepthPolicy, Progress, generate, import, inspect};
+use vlf_runtime::{Field, Hit, Ray};
+
+#[derive(Parser)]
+#[command(
+    name = "vlf-bake",
+    version,
+    about = "Bake triangle meshes into visibility fields that load instantly, and inspect, verify and trace them.",
+    long_about = "Bake triangle meshes (OBJ, glTF, GLB) into a visibility field: a precomputed, memory-mappable \
+ray-tracing acceleration structure (Mortensen et al., \"A Visibility Field for Ray Tracing\"). A field is one \
+versioned, content-hashed file; bakes are reproducible to the byte.\n\nTypical use:\n  vlf-bake bake scene.glb -o scene.vlf\n  vlf-bake dump scene.vlf --verify\n  vlf-bake rays scene.vlf -o rays.bin && vlf-bake trace scene.vlf --rays rays.bin --out hits.bin --json"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Bake one or more meshes into a field file.
+    Bake(BakeArgs),
+    /// Describe a field: header, parameters, sections, statistics; --verify checks every byte.
+    Dump(DumpArgs),
+    /// Trace a file of rays against a field and write one hit record per ray.
+    Trace(TraceArgs),
+    /// Write a rays file of primary rays for a camera that frames a field's scene.
+    Rays(RaysArgs),
+    /// Generate a test scene (the paper's random triangles, grids, slivers) as OBJ.
+    Gen(GenArgs),
+    /// Bake the bundled bunny, dump and verify it, and trace a frame from outside and inside.
+    Demo(DemoArgs),
+}
+
+#[derive(Args)]
+struct DemoArgs {
+    /// The mesh to bake (default: the bunny in the repository's fixtures).
+    #[arg(long, value_name = "MESH")]
+    input: Option<PathBuf>,
+    /// Where to write the field, rays and hits.
+    #[arg(long, default_value = "target/vlf-demo", value_name = "DIR")]
+    output_dir: PathBuf,
+}
+
+#[derive(Args)]
+struct BakeArgs {
+    /// Input meshes: .obj, .gltf or .glb. Several inputs are baked into one field.
+    #[arg(required = true, value_name = "INPUT")]
+    inputs: Vec<PathBuf>,
+    /// The field file to write (replaced atomically).
+    #[arg(short, long, value_name = "FIELD")]
+    output: PathBuf,
+    /// Number of directions l; rounded up to the next lattice size 2N²+1 (3, 9, 19, 33, 51, ..., 2049, ...).
+    /// Chosen automatically under --max-bytes if absent.
+    #[arg(long, value_name = "L")]
+    directions: Option<u32>,
+    /// Tiles per side n of each direction's n×n beam grid. Chosen automatically if absent.
+    #[arg(long, value_name = "N")]
+    tiles: Option<u32>,
+    /// BSP depth policy: target triangles per leaf.
+    #[arg(long, default_value_t = DEFAULT_LEAF_SIZE, value_name = "K")]
+    leaf_size: u32,
+    /// BSP depth policy: largest depth of a tile's 1D BSP (0 = linear tiles, no BSP).
+    #[arg(long, default_value_t = DEFAULT_MAX_DEPTH, value_name = "D")]
+    max_depth: u32,
+    /// Size budget for automatic parameters, and a ceiling for explicit ones (e.g. 4GiB, 512MiB, 1e9).
+    #[arg(long, default_value = "4GiB", value_parser = parse_size, value_name = "SIZE")]
+    max_bytes: u64,
+    /// Automatic parameters aim at no more than this many bytes of field per triangle.
+    #[arg(long, default_value = "64KiB", value_parser = parse_size, value_name = "SIZE")]
+    max_bytes_per_triangle: u64,
+    /// Worker threads (default: RAYON_NUM_THREADS, else all cores). The output does not depend on it.
+    #[arg(long, value_name = "T")]
+    threads: Option<usize>,
+    /// No progress bar and no summary on success.
+    #[arg(short, long)]
+    quiet: bool,
+    /// Print the summary as one JSON object.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Args)]
+struct DumpArgs {
+    /// The field file.
+    field: PathBuf,
+    /// Print one JSON object instead of text.
+    #[arg(long)]
+    json: bool,
+    /// Recompute every hash and check every offset and index; exit 1 naming the first fault.
+    #[arg(long)]
+    verify: bool,
+    /// No progress bar during --verify.
+    #[arg(short, long)]
+    quiet: bool,
+}
+
+#[derive(Args)]
+struct TraceArgs {
+    /// The field file.
+    field: PathBuf,
+    /// Rays: 32-byte little-endian records (formats/rays.md).
+    #[arg(long, value_name = "FILE")]
+    rays: PathBuf,
+    /// Hits: 16-byte records, one per ray (formats/rays.md).
+    #[arg(long, value_name = "FILE")]
+    out: PathBuf,
+    /// Answer any-hit (shadow) queries instead of closest-hit.
+    #[arg(long)]
+    any_hit: bool,
+    /// Print rays, hits, seconds (tracing only) and mrays_per_s as one JSON object.
+    #[arg(long)]
+    json: bool,
+    /// Worker threads (default: RAYON_NUM_THREADS, else all cores).
+    #[arg(long, value_name = "T")]
+    threads: Option<usize>,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum View {
+    /// From outside the scene's bounding sphere, framing all of it.
+    Outside,
+    /// From inside the scene, near its centre.
+    Inside,
+}
+
+#[derive(Args)]
+struct RaysArgs {
+    /// The field whose bounding sphere the camera frames.
+    field: PathBuf,
+    /// The rays file to write.
+    #[arg(short, long, value_name = "FILE")]
+    output: PathBuf,
+    #[arg(long, value_enum, default_value = "outside")]
+    view: View,
+    #[arg(long, default_value_t = 512)]
+    width: u32,
+    #[arg(long, default_value_t = 512)]
+    height: u32,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum SceneKind {
+    /// The paper's scene: triangles with centres uniform in [-1,1]³, vertices within ±size of the centre.
+    Random,
+    /// Axis-aligned coplanar grids with shared edges (count = cells per side, 4 layers).
+    Grid,
+    /// Long thin slivers.
+    Slivers,
+}
+
+#[derive(Args)]
+struct GenArgs {
+    #[arg(value_enum)]
+    scene: SceneKind,
+    /// Number of triangles (random, slivers) or cells per side (grid).
+    #[arg(long, default_value_t = 10_000)]
+    count: usize,
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Random scene: half-extent of each triangle around its centre.
+    #[arg(long, default_value_t = generate::DEFAULT_TRIANGLE_SIZE)]
+    size: f64,
+    /// The OBJ file to write.
+    #[arg(short, long, value_name = "FILE")]
+    output: PathBuf,
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match run(cli) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) if is_broken_pipe(&e) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn is_broken_pipe(e: &anyhow::Error) -> bool {
+    e.chain().any(|c| c.downcast_ref::<std::io::Error>().is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe))
+}
+
+fn run(cli: Cli) -> Result<()> {
+    match cli.command {
+        Command::Bake(a) => with_threads(a.threads, || bake(&a)),
+        Command::Dump(a) => dump(&a),
+        Command::Trace(a) => with_threads(a.threads, || trace(&a)),
+        Command::Rays(a) => rays(&a),
+        Command::Gen(a) => gen_scene(&a),
+        Command::Demo(a) => demo(&a),
+    }
+}
+
+/// Runs `f` on a pool of `threads` workers, or on rayon's global pool (which honours
+/// RAYON_NUM_THREADS) when `threads` is `None`.
+fn with_threads<T: Send>(threads: Option<usize>, f: impl FnOnce() -> Result<T> + Send) -> Result<T> {
+    match threads {
+        None => f(),
+        Some(0) => bail!("--threads must be at least 1"),
+        Some(t) => {
+            rayon::ThreadPoolBuilder::new().num_threads(t).build().context("cannot start worker threads")?.install(f)
+        }
+    }
+}
+
+/// Parses `4GiB`, `512MiB`, `100MB`, `1e9`, `123456`.
+fn parse_size(s: &str) -> Result<u64, String> {
+    let t = s.trim();
+    let split = t.find(|c: char| c.is_ascii_alphabetic() && c != 'e' && c != 'E').unwrap_or(t.len());
+    let (num, unit) = t.split_at(split);
+    let value: f64 = num.trim().parse().map_err(|_| format!("`{s}` is not a size (try 4GiB, 512MiB or 1000000)"))?;
+    let scale = match unit.trim().to_ascii_lowercase().as_str() {
+        "" | "b" => 1.0,
+        "k" | "kb" => 1e3,
+        "m" | "mb" => 1e6,
+        "g" | "gb" => 1e9,
+        "t" | "tb" => 1e12,
+        "kib" => 1024.0,
+        "mib" => 1024.0 * 1024.0,
+        "gib" => 1024.0 * 1024.0 * 1024.0,
+        "tib" => 1024.0f64.powi(4),
+        other => return Err(format!("unknown size unit `{other}` in `{s}` (use B, KB, MB, GB, KiB, MiB, GiB)")),
+    };
+    let bytes = value * scale;
+    if !(bytes.is_finite() && bytes >= 1.0 && bytes < u64::MAX as f64) {
+        return Err(format!("`{s}` is not a positive size"));
+    }
+    Ok(bytes as u64)
+}
+
+/// A progress bar on standard error, drawn only when it is a terminal and not silenced.
+struct Bar {
+    enabled: bool,
+    bar: Mutex<Option<ProgressBar>>,
+}
+
+impl Bar {
+    fn new(quiet: bool) -> Self {
+        Bar { enabled: !quiet && std::io::stderr().is_terminal(), bar: Mutex::new(None) }
+    }
+}
+
+impl Progress for Bar {
+    fn begin(&self, phase: &str, total: u64) {
+        if !self.enabled {
+            return;
+        }
+        let bar = ProgressBar::new(total);
+        bar.set_style(
+            ProgressStyle::with_template("{msg:>20} [{bar:40}] {pos}/{len} ({eta} left)")
+                .expect("static template")
+                .progress_chars("=> "),
+        );
+        bar.set_message(phase.to_string());
+        *self.bar.lock().unwrap_or_else(|e| e.into_inner()) = Some(bar);
+    }
+
+    fn advance(&self, done: u64) {
+        if let Some(b) = self.bar.lock().unwrap_or_else(|e| e.into_inner()).as_ref() {
+            b.inc(done);
+        }
+    }
+
+    fn end(&self) {
+        if let Some(b) = self.bar.lock().unwrap_or_else(|e| e.into_inner()).take() {
+            b.finish_and_clear();
+        }
+    }
+}
+
+fn stdout_line(s: &str) -> Result<()> {
+    let mut out = std::io::stdout().lock();
+    writeln!(out, "{s}")?;
+    out.flush()?;
+    Ok(())
+}
+
+fn bake(a: &BakeArgs) -> Result<()> {
+    let config = BakeConfig {
+        directions: a.directions,
+        tiles: a.tiles,
+        depth: DepthPolicy { leaf_size: a.leaf_size, max_depth: a.max_depth },
+        max_bytes: a.max_bytes,
+        max_bytes_per_triangle: a.max_bytes_per_triangle,
+    };
+    config.validate()?;
+    let bar = Bar::new(a.quiet || a.json);
+    let started = Instant::now();
+    let scene = import::import_paths(&a.inputs)?;
+    for w in &scene.report.warnings {
+        if !a.quiet {
+            eprintln!("warning: {w}");
+        }
+    }
+    let prep = vlf_bake::Prepared::new(&scene);
+    let choice = vlf_bake::choose(&prep, &config)?;
+    if !a.quiet && !a.json && choice.automatic {
+        eprintln!("{}", choice.reason);
+    }
+    let mut summary = vlf_bake::bake::bake_to_path(&prep, &choice, &config.request(), &a.output, &bar)?;
+    summary.seconds = started.elapsed().as_secs_f64();
+    if a.json {
+        #[derive(serde::Serialize)]
+        struct Out<'a> {
+            #[serde(flatten)]
+            summary: &'a vlf_bake::BakeSummary,
+            import: &'a vlf_bake::ImportReport,
+        }
+        stdout_line(&serde_json::to_string(&Out { summary: &summary, import: &scene.report })?)?;
+    } else if !a.quiet {
+        let s = &summary;
+        let mut text = format!(
+            "baked {}: {} triangles, {} directions × {}² tiles, {} ({} bytes) in {:.2} s\n  content hash {}\n  input hash   {}",
+            s.output.display(),
+            s.triangles,
+            s.directions,
+            s.tile_resolution,
+            human_bytes(s.bytes),
+            s.bytes,
+            s.seconds,
+            s.content_hash,
+            s.input_hash
+        );
+        if scene.report.dropped_degenerate + scene.report.skipped_points + scene.report.skipped_lines > 0 {
+            text.push_str(&format!(
+                "\n  dropped {} degenerate triangles; skipped {} point and {} line primitives",
+                scene.report.dropped_degenerate, scene.report.skipped_points, scene.report.skipped_lines
+            ));
+        }
+        stdout_line(&text)?;
+    }
+    Ok(())
+}
+
+fn dump(a: &DumpArgs) -> Result<()> {
+    let field = Field::open(&a.field)?;
+    let info = inspect::describe(field.reader());
+    let verified = if a.verify {
+        let bar = Bar::new(a.quiet || a.json);
+        bar.begin("verifying", info.file_bytes);
+        let mut last = 0;
+        let t = Instant::now();
+        let result = inspect::verify(field.reader(), &mut |done, _| {
+            bar.advance(done - last);
+            last = done;
+        });
+        bar.end();
+        match result {
+            Ok(r) => Some((r, t.elapsed().as_secs_f64())),
+            Err(e) => bail!("{} failed verification: {e}", a.field.display()),
+        }
+    } else {
+        None
+    };
+    if a.json {
+        #[derive(serde::Serialize)]
+        struct Out<'a> {
+            #[serde(flatten)]
+            info: &'a inspect::Description,
+            #[serde(skip_serializing_if = "Option::is_none")]
+            verify: Option<serde_json::Value>,
+        }
+        let verify = verified.as_ref().map(|(r, secs)| {
+            serde_json::json!({"ok": true, "bytes_hashed": r.bytes_hashed, "tiles": r.tiles, "triangle_ids": r.ids, "seconds": secs})
+        });
+        return stdout_line(&serde_json::to_string_pretty(&Out { info: &info, verify })?);
+    }
+    stdout_line(&describe_text(&info))?;
+    if let Some((r, secs)) = verified {
+        stdout_line(&format!(
+            "verify: OK: {} hashed, {} tiles and {} triangle ids checked in {secs:.2} s",
+            human_bytes(r.bytes_hashed),
+            r.tiles,
+            r.ids
+        ))?;
+    }
+    Ok(())
+}
+
+fn describe_text(d: &inspect::Description) -> String {
+    let st = &d.statistics;
+    let mut s = String::new();
+    let mut line = |t: String| {
+        s.push_str(&t);
+        s.push('\n');
+    };
+    line(format!("VLF field, format {}, {} ({} bytes)", d.format_version, human_bytes(d.file_bytes), d.file_bytes));
+    line(format!("  content hash  {}", d.content_hash));
+    line(format!("  input hash    {}", d.input_hash));
+    line("scene".into());
+    line(format!("  triangles     {} ({} degenerate dropped at import)", d.triangle_count, d.dropped_degenerate));
+    line(format!(
+        "  sphere        centre ({:.6}, {:.6}, {:.6}), radius {:.6}",
+        d.center[0], d.center[1], d.center[2], d.radius
+    ));
+    line(format!("  bounds        {:?} .. {:?}", d.aabb_min, d.aabb_max));
+    for i in &d.inputs {
+        line(format!("  input         {} ({} triangles, blake3 {})", i.name, i.triangles, &i.file_hash[..16]));
+    }
+    line("parameters".into());
+    let req = |v: Option<u32>| v.map_or("automatic".to_string(), |v| format!("requested {v}"));
+    line(format!(
+        "  directions    {} (lattice N = {}; {})",
+        d.direction_count,
+        d.lattice_n,
+        req(d.requested_directions)
+    ));
+    line(format!("  tiles         {}² ({})", d.tile_resolution, req(d.requested_tiles)));
+    line(format!("  bsp policy    leaf size {}, max depth {}", d.leaf_size, d.max_depth));
+    line(format!(
+        "  budget        {} ({} per triangle for automatic parameters)",
+        human_bytes(d.max_bytes),
+        human_bytes(d.max_bytes_per_triangle)
+    ));
+    line(format!("  margin        {:.3e} (world units)", d.margin));
+    line(format!("  worst angle   {:.3}° between a ray and its chosen direction", d.worst_direction_angle_deg));
+    line("statistics".into());
+    line(format!(
+        "  triangles/tile mean {:.2} ({:.2} over non-empty tiles), max {}; {:.1}% of {} tiles empty",
+        st.mean_triangles_per_tile,
+        st.mean_triangles_per_nonempty_tile,
+        st.max_triangles_per_tile,
+        100.0 * st.empty_tile_share,
+        st.tiles
+    ));
+    line(format!(
+        "  leaf depths   mean {:.2} over non-empty tiles, max {}; histogram {:?}",
+        st.mean_depth_nonempty, st.max_depth_used, st.depth_histogram
+    ));
+    line(format!("  ids           {} in {} leaves", st.triangle_ids, st.leaves));
+    line("sections".into());
+    line(format!("  {:<13} {:>5} {:>14} {:>14} {:>12}  {}", "kind", "codec", "offset", "bytes", "elements", "blake3"));
+    for e in &d.sections {
+        line(format!(
+            "  {:<13} {:>5} {:>14} {:>14} {:>12}  {}",
+            e.name,
+            e.codec,
+            e.offset,
+            e.stored_length,
+            e.elements,
+            &e.raw_hash[..16]
+        ));
+    }
+    s.pop();
+    s
+}
+
+fn read_rays(path: &Path) -> Result<Vec<Ray>> {
+    let bytes = std::fs::read(path).with_context(|| format!("cannot read rays file {}", path.display()))?;
+    if bytes.len() % size_of::<Ray>() != 0 {
+        bail!(
+            "rays file {} is {} bytes, not a multiple of the 32-byte ray record (formats/rays.md)",
+            path.display(),
+            bytes.len()
+        );
+    }
+    Ok(bytemuck::pod_collect_to_vec(&bytes))
+}
+
+fn trace(a: &TraceArgs) -> Result<()> {
+    let field = Field::open(&a.field)?;
+    let rays = read_rays(&a.rays)?;
+    let mut hits = vec![Hit::MISS; rays.len()];
+    let start = Instant::now();
+    if a.any_hit {
+        use rayon::prelude::*;
+        let view = field.view();
+        rays.par_iter().zip(hits.par_iter_mut()).with_min_len(256).for_each(|(r, h)| {
+            *h = Hit::record(view.any_hit_counted(r, &mut ()));
+        });
+    } else {
+        field.par_closest_hits(&rays, &mut hits);
+    }
+    let seconds = start.elapsed().as_secs_f64();
+    let dir = a.out.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    vlf_bake::bake::write_atomically(&a.out, dir, |w| w.write_all(bytemuck::cast_slice(&hits)))
+        .with_context(|| format!("cannot write hits file {}", a.out.display()))?;
+    let hit_count = hits.iter().filter(|h| h.prim != u32::MAX).count();
+    let invalid = rays.iter().filter(|r| !r.is_valid()).count();
+    let mrays = rays.len() as f64 / seconds.max(1e-12) / 1e6;
+    if a.json {
+        stdout_line(
+            &serde_json::json!({
+                "rays": rays.len(), "hits": hit_count, "invalid": invalid,
+                "seconds": seconds, "mrays_per_s": mrays,
+                "threads": rayon::current_num_threads(), "any_hit": a.any_hit,
+            })
+            .to_string(),
+        )
+    } else {
+        stdout_line(&format!(
+            "traced {} rays ({} hits, {invalid} invalid) in {seconds:.3} s: {mrays:.2} Mrays/s on {} threads",
+            rays.len(),
+            hit_count,
+            rayon::current_num_threads()
+        ))
+    }
+}
+
+fn rays(a: &RaysArgs) -> Result<()> {
+    if a.width == 0 || a.height == 0 {
+        bail!("--width and --height must be positive");
+    }
+    let field = Field::open(&a.field)?;
+    let (center, radius) = field.bounding_sphere();
+    let aspect = a.width as f64 / a.height as f64;
+    let camera = match a.view {
+        View::Outside => vlf_geom::Camera::outside(center, radius, aspect),
+        View::Inside => vlf_geom::Camera::inside(center, radius, aspect),
+    };
+    let rays = camera.primary_rays(a.width, a.height);
+    let dir = a.output.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    vlf_bake::bake::write_atomically(&a.output, dir, |w| w.write_all(bytemuck::cast_slice(&rays)))
+        .with_context(|| format!("cannot write rays file {}", a.output.display()))?;
+    Ok(())
+}
+
+fn gen_scene(a: &GenArgs) -> Result<()> {
+    let (name, tris) = match a.scene {
+        SceneKind::Random => ("random", generate::random_cube(a.count, a.size, a.seed)),
+        SceneKind::Grid => ("grid", generate::grid(a.count as u32, 4, 1.0)),
+        SceneKind::Slivers => ("slivers", generate::slivers(a.count, a.seed)),
+    };
+    let dir = a.output.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    vlf_bake::bake::write_atomically(&a.output, dir, |w| generate::write_obj(w, name, &tris))
+        .with_context(|| format!("cannot write {}", a.output.display()))?;
+    Ok(())
+}
+
+/// The bundled default mesh, found through the source tree this binary was built from.
+const DEMO_MESH: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/meshes/bunny.obj");
+
+fn demo(a: &DemoArgs) -> Result<()> {
+    let input = a.input.clone().unwrap_or_else(|| PathBuf::from(DEMO_MESH));
+    if !input.exists() {
+        bail!("demo mesh {} not found; pass --input MESH", input.display());
+    }
+    std::fs::create_dir_all(&a.output_dir).with_context(|| format!("cannot create {}", a.output_dir.display()))?;
+    let field_path = a.output_dir.join("demo.vlf");
+    stdout_line(&format!("1. bake {} (parameters chosen automatically)", input.display()))?;
+    bake(&BakeArgs {
+        inputs: vec![input],
+        output: field_path.clone(),
+        directions: None,
+        tiles: None,
+        leaf_size: DEFAULT_LEAF_SIZE,
+        max_depth: DEFAULT_MAX_DEPTH,
+        max_bytes: vlf_bake::params::DEFAULT_MAX_BYTES,
+        max_bytes_per_triangle: vlf_bake::params::DEFAULT_MAX_BYTES_PER_TRIANGLE,
+        threads: None,
+        quiet: false,
+        json: false,
+    })?;
+    stdout_line(&format!("\n2. dump {} --verify", field_path.display()))?;
+    dump(&DumpArgs { field: field_path.clone(), json: false, verify: true, quiet: false })?;
+    for (view, name) in [(View::Outside, "outside"), (View::Inside, "inside")] {
+        let rays_path = a.output_dir.join(format!("{name}.rays"));
+        let hits_path = a.output_dir.join(format!("{name}.hits"));
+        stdout_line(&format!("\n3. trace 512×512 primary rays from {name} the scene"))?;
+        rays(&RaysArgs { field: field_path.clone(), output: rays_path.clone(), view, width: 512, height: 512 })?;
+        trace(&TraceArgs {
+            field: field_path.clone(),
+            rays: rays_path,
+            out: hits_path,
+            any_hit: false,
+            json: false,
+            threads: None,
+        })?;
+    }
+    stdout_line(&format!("\nfiles are in {}", a.output_dir.display()))
+}

@@ -1,0 +1,243 @@
+//! Bake parameters: what the user asked for ([`BakeConfig`]), what the bake uses ([`Params`]),
+//! and the automatic choice of the direction count and tile resolution under a size budget.
+//!
+//! The policy: walk up a ladder of (directions, tiles) rungs that keeps the tiles a ray crosses
+//! small (finer tiles need more directions, `docs/architecture.md`), and take the finest rung
+//! whose estimated size fits the budget, the smaller of `--max-bytes` and
+//! `--max-bytes-per-triangle` × the triangle count, stopping early once tiles are already nearly
+//! singular (more resolution then buys little speed for much memory). The estimate bakes a few sample directions for real, so it
+//! accounts for the scene's actual shape.
+
+use crate::bake::{BakeError, Prepared, sample_direction_bytes};
+use vlf_format::{MAX_DEPTH, Request};
+use vlf_geom::Lattice;
+
+/// The default size budget for automatic parameters: 4 GiB.
+pub const DEFAULT_MAX_BYTES: u64 = 4 << 30;
+/// The default per-triangle allowance of automatic parameters: 64 KiB per triangle, so a field
+/// stays proportionate to its scene (a 1K-triangle scene gets tens of MB, not GB). The paper's
+/// fields were 10–25 KB per triangle.
+pub const DEFAULT_MAX_BYTES_PER_TRIANGLE: u64 = 64 << 10;
+/// Default target of triangles per BSP leaf.
+pub const DEFAULT_LEAF_SIZE: u32 = 4;
+/// Default largest BSP depth.
+pub const DEFAULT_MAX_DEPTH: u32 = 8;
+/// Automatic refinement stops once the mean number of triangles in a non-empty tile falls to this.
+pub const SPARSE_TILE_LOAD: f64 = 3.0;
+/// Directions baked to estimate a rung's size.
+const SAMPLE_DIRECTIONS: usize = 8;
+
+/// The ladder of automatic (lattice N, tiles n) rungs, coarse to fine. Each step doubles either
+/// the tile resolution or the lattice resolution, keeping `n · worst angle` (the tiles a ray
+/// crosses, `docs/architecture.md`) bounded.
+pub const LADDER: [(u32, u32); 9] =
+    [(4, 8), (8, 16), (8, 32), (16, 32), (16, 64), (32, 64), (32, 128), (64, 128), (64, 256)];
+
+/// How deep each tile's 1D BSP goes (`formats/vlf.md` §6.3): a tile with `m` triangles gets the
+/// smallest depth `D ≤ max_depth` with `leaf_size · 2^D ≥ m`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+pub struct DepthPolicy {
+    pub leaf_size: u32,
+    pub max_depth: u32,
+}
+
+impl Default for DepthPolicy {
+    fn default() -> Self {
+        DepthPolicy { leaf_size: DEFAULT_LEAF_SIZE, max_depth: DEFAULT_MAX_DEPTH }
+    }
+}
+
+/// What the user asks for. `None` means "choose for me".
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct BakeConfig {
+    /// Requested number of directions; rounded up to the next lattice size `2N² + 1`.
+    pub directions: Option<u32>,
+    /// Requested tiles per side.
+    pub tiles: Option<u32>,
+    pub depth: DepthPolicy,
+    /// Size budget for automatic parameters, and a ceiling for explicit ones.
+    pub max_bytes: u64,
+    /// Automatic parameters aim at no more than this many bytes per triangle.
+    pub max_bytes_per_triangle: u64,
+}
+
+impl Default for BakeConfig {
+    fn default() -> Self {
+        BakeConfig {
+            directions: None,
+            tiles: None,
+            depth: DepthPolicy::default(),
+            max_bytes: DEFAULT_MAX_BYTES,
+            max_bytes_per_triangle: DEFAULT_MAX_BYTES_PER_TRIANGLE,
+        }
+    }
+}
+
+impl BakeConfig {
+    /// Checks ranges; the CLI calls it so bad flags fail before any work.
+    pub fn validate(&self) -> Result<(), BakeError> {
+        let bad = |m: String| Err(BakeError::Params(m));
+        if let Some(l) = self.directions {
+            if !(3..=33_554_433).contains(&l) {
+                return bad(format!("--directions {l} is outside 3..=33554433 (a lattice of N = 1..=4096)"));
+            }
+        }
+        if let Some(n) = self.tiles {
+            if !(1..=65536).contains(&n) {
+                return bad(format!("--tiles {n} is outside 1..=65536"));
+            }
+        }
+        if self.depth.leaf_size == 0 {
+            return bad("--leaf-size must be at least 1".into());
+        }
+        if self.depth.max_depth > MAX_DEPTH {
+            return bad(format!("--max-depth {} exceeds the format's limit of {MAX_DEPTH}", self.depth.max_depth));
+        }
+        if self.max_bytes == 0 || self.max_bytes_per_triangle == 0 {
+            return bad("--max-bytes and --max-bytes-per-triangle must be positive".into());
+        }
+        Ok(())
+    }
+
+    /// The request recorded in the file and hashed into the input hash.
+    pub fn request(&self) -> Request {
+        Request {
+            requested_directions: self.directions.unwrap_or(0),
+            requested_tiles: self.tiles.unwrap_or(0),
+            leaf_size: self.depth.leaf_size,
+            max_depth: self.depth.max_depth,
+            max_bytes: self.max_bytes,
+            max_bytes_per_triangle: self.max_bytes_per_triangle,
+        }
+    }
+}
+
+/// The parameters a bake runs with.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Params {
+    pub lattice_n: u32,
+    pub tiles: u32,
+    pub depth: DepthPolicy,
+    /// The conservative margin μ in world units.
+    pub margin: f64,
+}
+
+/// The chosen parameters and why.
+#[derive(Clone, Debug)]
+pub struct Choice {
+    pub params: Params,
+    pub automatic: bool,
+    pub estimated_bytes: Option<u64>,
+    pub reason: String,
+}
+
+/// A lower bound on a field's size: every tile costs a record and a bound, every triangle lands in
+/// at least one tile per direction, plus the fixed sections.
+pub fn lower_bound_bytes(triangles: u64, lattice_n: u32, tiles: u32) -> u64 {
+    let l = Lattice::new(lattice_n).direction_count();
+    let n2 = tiles as u64 * tiles as u64;
+    l * (16 * n2 + 4 * triangles + 32 + 16 + 72) + 56 * triangles
+}
+
+fn params_for(prep: &Prepared<'_>, lattice_n: u32, tiles: u32, depth: DepthPolicy) -> Params {
+    Params { lattice_n, tiles, depth, margin: prep.radius * crate::bake::MARGIN_FRACTION }
+}
+
+/// Estimated size of a field: sample directions baked for real, scaled to all directions.
+fn estimate(prep: &Prepared<'_>, p: &Params) -> Result<(u64, f64), BakeError> {
+    let (per_direction, stats) = sample_direction_bytes(prep, p, SAMPLE_DIRECTIONS)?;
+    let l = Lattice::new(p.lattice_n).direction_count();
+    let fixed = 56 * prep.triangle_count() as u64 + 64 * 16;
+    let nonempty = (stats.tile_count - stats.empty_tiles).max(1);
+    Ok((l * per_direction + fixed, stats.tile_triangle_sum as f64 / nonempty as f64))
+}
+
+/// Chooses the parameters for `config` on the prepared scene.
+pub fn choose(prep: &Prepared<'_>, config: &BakeConfig) -> Result<Choice, BakeError> {
+    config.validate()?;
+    let tris = prep.triangle_count() as u64;
+    // Explicit parameters are held to the absolute budget only; automatic ones also to the
+    // per-triangle allowance.
+    let budget = config.max_bytes;
+    let auto_budget = budget.min(config.max_bytes_per_triangle.saturating_mul(tris));
+    let explicit_n = config.directions.map(|l| Lattice::with_at_least(l as u64).n);
+    if let (Some(lattice_n), Some(tiles)) = (explicit_n, config.tiles) {
+        let lb = lower_bound_bytes(tris, lattice_n, tiles);
+        if lb > budget {
+            return Err(BakeError::Params(format!(
+                "{} directions × {tiles}² tiles need at least {} for {tris} triangles, over the --max-bytes budget of {}",
+                Lattice::new(lattice_n).direction_count(),
+                human_bytes(lb),
+                human_bytes(budget)
+            )));
+        }
+        return Ok(Choice {
+            params: params_for(prep, lattice_n, tiles, config.depth),
+            automatic: false,
+            estimated_bytes: None,
+            reason: "as requested".into(),
+        });
+    }
+
+    // Rungs consistent with whatever was fixed by the user.
+    let rungs: Vec<(u32, u32)> = LADDER
+        .iter()
+        .map(|&(ln, t)| (explicit_n.unwrap_or(ln), config.tiles.unwrap_or(t)))
+        .fold(Vec::new(), |mut v, r| {
+            if !v.contains(&r) {
+                v.push(r);
+            }
+            v
+        });
+    let mut chosen: Option<(Params, u64, f64)> = None;
+    for &(lattice_n, tiles) in &rungs {
+        if lower_bound_bytes(tris, lattice_n, tiles) > auto_budget {
+            break;
+        }
+        let p = params_for(prep, lattice_n, tiles, config.depth);
+        let (bytes, load) = estimate(prep, &p)?;
+        if bytes > auto_budget {
+            break;
+        }
+        chosen = Some((p, bytes, load));
+        if load <= SPARSE_TILE_LOAD {
+            break;
+        }
+    }
+    let Some((params, bytes, load)) = chosen else {
+        let (ln, t) = rungs[0];
+        return Err(BakeError::Params(format!(
+            "even the coarsest field ({} directions × {t}² tiles) does not fit the budget of {} for {tris} triangles \
+             (--max-bytes {}, --max-bytes-per-triangle {}); raise them or give --directions and --tiles",
+            Lattice::new(ln).direction_count(),
+            human_bytes(auto_budget),
+            human_bytes(budget),
+            human_bytes(config.max_bytes_per_triangle)
+        )));
+    };
+    Ok(Choice {
+        params,
+        automatic: true,
+        estimated_bytes: Some(bytes),
+        reason: format!(
+            "chose {} directions × {}² tiles: estimated {} (budget {}: the smaller of --max-bytes and \
+             --max-bytes-per-triangle × {tris}), {load:.1} triangles per non-empty tile",
+            Lattice::new(params.lattice_n).direction_count(),
+            params.tiles,
+            human_bytes(bytes),
+            human_bytes(auto_budget)
+        ),
+    })
+}
+
+/// `1.5 GiB`-style sizes.
+pub fn human_bytes(b: u64) -> String {
+    const UNITS: [&str; 5] = ["B", "KiB", "MiB", "GiB", "TiB"];
+    let mut v = b as f64;
+    let mut u = 0;
+    while v >= 1024.0 && u + 1 < UNITS.len() {
+        v /= 1024.0;
+        u += 1;
+    }
+    if u == 0 { format!("{b} B") } else { format!("{v:.1} {}", UNITS[u]) }
+}

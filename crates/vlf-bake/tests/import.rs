@@ -1,0 +1,701 @@
+//! Integration tests of the OBJ and glTF importers against the meshes in `fixtures/meshes/`.
+
+use serde_json::{Value, json};
+use std::path::{Path, PathBuf};
+use vlf_bake::import::{import_path, import_paths};
+use vlf_bake::{ImportError, Scene, SceneBuilder};
+use vlf_format::{NO_INDEX, source_kind};
+
+fn fixture(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/meshes").join(name)
+}
+
+fn import(name: &str) -> Scene {
+    import_paths(&[fixture(name)]).unwrap_or_else(|e| panic!("{name}: {e}"))
+}
+
+fn import_err(name: &str) -> ImportError {
+    match import_paths(&[fixture(name)]) {
+        Ok(scene) => panic!("{name} imported {} triangles, expected an error", scene.len()),
+        Err(e) => {
+            let file = Path::new(name).file_name().unwrap().to_str().unwrap();
+            assert!(e.to_string().contains(file), "the message of {name} does not name the file: {e}");
+            e
+        }
+    }
+}
+
+fn string(scene: &Scene, offset: u32, length: u32) -> &str {
+    std::str::from_utf8(&scene.strings[offset as usize..(offset + length) as usize]).unwrap()
+}
+
+fn input_name(scene: &Scene, i: usize) -> &str {
+    string(scene, scene.inputs[i].name_offset, scene.inputs[i].name_length)
+}
+
+fn source_name(scene: &Scene, s: usize) -> &str {
+    string(scene, scene.sources[s].name_offset, scene.sources[s].name_length)
+}
+
+/// The vertices of the triangles that came from `source`, with their index within the source.
+fn triangles_of(scene: &Scene, source: u32) -> Vec<(u32, [[f32; 3]; 3])> {
+    let vertices = scene.vertices();
+    scene.provenance.iter().zip(vertices).filter(|(p, _)| p.source == source).map(|(p, v)| (p.index, v)).collect()
+}
+
+fn bounds(triangles: &[(u32, [[f32; 3]; 3])]) -> ([f32; 3], [f32; 3]) {
+    let mut lo = [f32::INFINITY; 3];
+    let mut hi = [f32::NEG_INFINITY; 3];
+    for (_, t) in triangles {
+        for v in t {
+            for k in 0..3 {
+                lo[k] = lo[k].min(v[k]);
+                hi[k] = hi[k].max(v[k]);
+            }
+        }
+    }
+    (lo, hi)
+}
+
+fn assert_close(actual: [f32; 3], expected: [f64; 3], tolerance: f64) {
+    for k in 0..3 {
+        assert!(
+            (actual[k] as f64 - expected[k]).abs() <= tolerance,
+            "vertex {actual:?} differs from the expected {expected:?}"
+        );
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Reference meshes
+
+#[test]
+fn bunny_obj() {
+    let scene = import("bunny.obj");
+    // 3,674 faces, none of zero area.
+    assert_eq!(scene.len(), 3674);
+    assert_eq!(scene.report.dropped_degenerate, 0);
+    assert_eq!((scene.report.skipped_points, scene.report.skipped_lines), (0, 0));
+    assert!(scene.report.warnings.is_empty(), "{:?}", scene.report.warnings);
+
+    assert_eq!(scene.inputs.len(), 1);
+    assert_eq!(input_name(&scene, 0), "bunny.obj");
+    assert_eq!(scene.inputs[0].triangle_count, 3674);
+    let bytes = std::fs::read(fixture("bunny.obj")).unwrap();
+    assert_eq!(scene.inputs[0].file_hash, *blake3::hash(&bytes).as_bytes());
+
+    // No `o`/`g` statement: one model, which tobj names "unnamed_object".
+    assert_eq!(scene.sources.len(), 1);
+    let s = &scene.sources[0];
+    assert_eq!(
+        (s.input, s.kind, s.mesh, s.primitive, s.node, s.material),
+        (0, source_kind::OBJ_OBJECT, 0, 0, NO_INDEX, NO_INDEX)
+    );
+    assert_eq!(source_name(&scene, 0), "unnamed_object");
+    assert!(scene.provenance.iter().enumerate().all(|(i, p)| p.source == 0 && p.index == i as u32));
+
+    // The first triangle is the first face, vertex for vertex.
+    let text = String::from_utf8(bytes).unwrap();
+    let vertices: Vec<[f32; 3]> = text
+        .lines()
+        .filter_map(|l| l.strip_prefix("v "))
+        .map(|l| {
+            let c: Vec<f32> = l.split_whitespace().map(|x| x.parse().unwrap()).collect();
+            [c[0], c[1], c[2]]
+        })
+        .collect();
+    let face: Vec<usize> = text
+        .lines()
+        .find_map(|l| l.strip_prefix("f "))
+        .unwrap()
+        .split_whitespace()
+        .map(|x| x.parse().unwrap())
+        .collect();
+    assert_eq!(scene.vertices()[0], [vertices[face[0] - 1], vertices[face[1] - 1], vertices[face[2] - 1]]);
+}
+
+/// The JSON and binary chunks of a GLB file, read by hand.
+fn glb_chunks(bytes: &[u8]) -> (Value, Vec<u8>) {
+    let u32_at = |at: usize| u32::from_le_bytes(bytes[at..at + 4].try_into().unwrap()) as usize;
+    assert_eq!(&bytes[..4], b"glTF");
+    let json_len = u32_at(12);
+    let json: Value = serde_json::from_slice(&bytes[20..20 + json_len]).unwrap();
+    let bin_at = 20 + json_len;
+    let bin_len = u32_at(bin_at);
+    (json, bytes[bin_at + 8..bin_at + 8 + bin_len].to_vec())
+}
+
+/// Element `i` of a tightly packed accessor, as f64 components.
+fn accessor_element(json: &Value, bin: &[u8], accessor: usize, i: usize) -> Vec<f64> {
+    let a = &json["accessors"][accessor];
+    let view = &json["bufferViews"][a["bufferView"].as_u64().unwrap() as usize];
+    let n = match a["type"].as_str().unwrap() {
+        "SCALAR" => 1,
+        "VEC3" => 3,
+        t => panic!("{t}"),
+    };
+    let start = view["byteOffset"].as_u64().unwrap_or(0) as usize + a["byteOffset"].as_u64().unwrap_or(0) as usize;
+    (0..n)
+        .map(|k| {
+            let at = start + (i * n + k) * 4;
+            let word: [u8; 4] = bin[at..at + 4].try_into().unwrap();
+            match a["componentType"].as_u64().unwrap() {
+                5125 => u32::from_le_bytes(word) as f64,
+                5126 => f32::from_le_bytes(word) as f64,
+                c => panic!("{c}"),
+            }
+        })
+        .collect()
+}
+
+#[test]
+fn bunny_scene_glb() {
+    let scene = import("bunny_scene.glb");
+    // Two bunnies of 3,674 triangles and a ground quad of 2; none of zero area after transforms.
+    assert_eq!(scene.len(), 7350);
+    assert_eq!(scene.report.dropped_degenerate, 0);
+    assert!(scene.report.warnings.is_empty(), "{:?}", scene.report.warnings);
+    assert_eq!(input_name(&scene, 0), "bunny_scene.glb");
+    assert_eq!(scene.inputs[0].triangle_count, 7350);
+
+    let described: Vec<_> = (0..scene.sources.len())
+        .map(|i| {
+            let s = &scene.sources[i];
+            (source_name(&scene, i), s.kind, s.mesh, s.primitive, s.node, s.material)
+        })
+        .collect();
+    let g = source_kind::GLTF_PRIMITIVE;
+    assert_eq!(
+        described,
+        [("bunny", g, 0, 0, 0, NO_INDEX), ("bunny_1", g, 1, 0, 1, NO_INDEX), ("ground", g, 2, 0, 2, NO_INDEX)]
+    );
+    let a = triangles_of(&scene, 0);
+    let b = triangles_of(&scene, 1);
+    let ground = triangles_of(&scene, 2);
+    assert_eq!((a.len(), b.len(), ground.len()), (3674, 3674, 2));
+    assert_ne!(bounds(&a), bounds(&b), "the two instances must be placed differently");
+
+    // Recompute vertices of the first triangle of each bunny by hand: the file's node matrix (as
+    // f32, which is how glTF stores it) applied to the raw accessor data.
+    let (json, bin) = glb_chunks(&std::fs::read(fixture("bunny_scene.glb")).unwrap());
+    for (node, triangles) in [(0usize, &a), (1, &b)] {
+        let m: Vec<f64> = json["nodes"][node]["matrix"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap() as f32 as f64)
+            .collect();
+        let primitive = &json["meshes"][node]["primitives"][0];
+        let (position, indices) = (
+            primitive["attributes"]["POSITION"].as_u64().unwrap() as usize,
+            primitive["indices"].as_u64().unwrap() as usize,
+        );
+        let (index, first) = triangles[0];
+        assert_eq!(index, 0);
+        for (k, vertex) in first.iter().enumerate() {
+            let i = accessor_element(&json, &bin, indices, k)[0] as usize;
+            let p = accessor_element(&json, &bin, position, i);
+            // Column-major: world[r] = m[r] x + m[4 + r] y + m[8 + r] z + m[12 + r].
+            let expected: [f64; 3] =
+                std::array::from_fn(|r| m[r] * p[0] + m[4 + r] * p[1] + m[8 + r] * p[2] + m[12 + r]);
+            assert_close(*vertex, expected, 1e-6 * (1.0 + expected.iter().map(|x| x.abs()).fold(0.0, f64::max)));
+        }
+    }
+    // The ground quad has no transform: y = -0.2 throughout.
+    assert!(ground.iter().all(|(_, t)| t.iter().all(|v| v[1] == -0.2)));
+}
+
+#[test]
+fn box_gltf_root_rotation_is_applied() {
+    let scene = import("Box.gltf");
+    assert_eq!(scene.len(), 12);
+    assert_eq!(scene.report.dropped_degenerate, 0);
+    assert_eq!(input_name(&scene, 0), "Box.gltf");
+    assert_eq!(scene.sources.len(), 1);
+    let s = &scene.sources[0];
+    // The mesh hangs off node 1, child of the rotated root node 0; it uses material 0.
+    assert_eq!((s.kind, s.mesh, s.primitive, s.node, s.material), (source_kind::GLTF_PRIMITIVE, 0, 0, 1, 0));
+    assert_eq!(source_name(&scene, 0), "Mesh");
+    // Indices 0 1 2 name (-½,-½,½) (½,-½,½) (-½,½,½); the root matrix (columns (1,0,0), (0,0,-1),
+    // (0,1,0)) maps (x, y, z) to (x, z, -y).
+    assert_eq!(scene.vertices()[0], [[-0.5, 0.5, 0.5], [0.5, 0.5, 0.5], [-0.5, 0.5, -0.5]]);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Small hand-made meshes
+
+#[test]
+fn obj_quads_ngons_groups_and_materials() {
+    let scene = import("small/groups.obj");
+    // Object: quad (2) + pentagon (3). Group: hexagon (4) + zero-area (dropped) + relative (1).
+    assert_eq!(scene.len(), 10);
+    assert_eq!(scene.report.dropped_degenerate, 1);
+    assert!(scene.report.warnings.is_empty(), "{:?}", scene.report.warnings);
+    assert_eq!(scene.sources.len(), 2);
+    assert_eq!(source_name(&scene, 0), "quads_and_pentagon");
+    assert_eq!(source_name(&scene, 1), "hexagon_group");
+    let s: Vec<_> = scene.sources.iter().map(|s| (s.kind, s.mesh, s.primitive, s.node, s.material)).collect();
+    let o = source_kind::OBJ_OBJECT;
+    assert_eq!(s, [(o, 0, 0, NO_INDEX, 0), (o, 1, 0, NO_INDEX, 1)]); // red, blue
+    let first = triangles_of(&scene, 0);
+    let second = triangles_of(&scene, 1);
+    assert_eq!(first.iter().map(|t| t.0).collect::<Vec<_>>(), [0, 1, 2, 3, 4]);
+    // Index 4 of the group is the zero-area `f 1 1 2`: dropped, but counted.
+    assert_eq!(second.iter().map(|t| t.0).collect::<Vec<_>>(), [0, 1, 2, 3, 5]);
+    // Fan triangulation: the quad 1 2 3 4 gives (1 2 3) and (1 3 4).
+    assert_eq!(first[0].1, [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0]]);
+    assert_eq!(first[1].1, [[0.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]]);
+    // `f -3 -2 -1` names the last three vertices.
+    assert_eq!(second[4].1, [[1.0, 1.6, 1.0], [0.0, 1.6, 1.0], [-0.5, 0.8, 1.0]]);
+    // Points, lines and the two-vertex face produce nothing and are not counted (OBJ).
+    assert_eq!((scene.report.skipped_points, scene.report.skipped_lines), (0, 0));
+}
+
+#[test]
+fn obj_missing_material_library_is_a_warning() {
+    let scene = import("small/missing_mtl.obj");
+    assert_eq!(scene.len(), 3);
+    assert_eq!(scene.sources.len(), 1);
+    assert_eq!(source_name(&scene, 0), "thing");
+    assert_eq!(scene.sources[0].material, NO_INDEX);
+    assert_eq!(scene.report.warnings.len(), 1, "{:?}", scene.report.warnings);
+    assert!(scene.report.warnings[0].contains("does_not_exist.mtl"), "{}", scene.report.warnings[0]);
+}
+
+#[test]
+fn gltf_primitive_modes() {
+    let scene = import("small/modes.gltf");
+    // Triangles (2, indexed u16), strip (4, not indexed), fan (4, indexed u8), triangles (2, not
+    // indexed); points, lines and a line strip skipped.
+    assert_eq!(scene.len(), 12);
+    assert_eq!(scene.report.skipped_points, 1);
+    assert_eq!(scene.report.skipped_lines, 2);
+    assert_eq!(scene.report.dropped_degenerate, 0);
+    let s: Vec<_> = scene.sources.iter().map(|s| (s.mesh, s.primitive, s.node, s.material)).collect();
+    // No scenes: the root node 0 is walked; the mesh sits on its child, node 1.
+    assert_eq!(s, [(0, 0, 1, 0), (0, 1, 1, NO_INDEX), (0, 2, 1, NO_INDEX), (0, 6, 1, NO_INDEX)]);
+    assert!((0..4).all(|i| source_name(&scene, i) == "modes"));
+    let per_source: Vec<usize> = (0..4).map(|s| triangles_of(&scene, s).len()).collect();
+    assert_eq!(per_source, [2, 4, 4, 2]);
+
+    // Node 0 translates by (10, 0, 0).
+    let p = |x: f32, y: f32, z: f32| [x + 10.0, y, z];
+    let strip = triangles_of(&scene, 1);
+    assert_eq!(strip.iter().map(|t| t.0).collect::<Vec<_>>(), [0, 1, 2, 3]);
+    // Strip: (0 1 2), (1 3 2), (2 3 4), (3 5 4).
+    assert_eq!(strip[0].1, [p(0., 0., 0.), p(1., 0., 0.), p(0., 1., 0.)]);
+    assert_eq!(strip[1].1, [p(1., 0., 0.), p(1., 1., 0.), p(0., 1., 0.)]);
+    assert_eq!(strip[3].1, [p(1., 1., 0.), p(1., 2., 0.), p(0., 2., 0.)]);
+    // Fan: (1 2 0), (2 3 0), ...
+    let fan = triangles_of(&scene, 2);
+    assert_eq!(fan[0].1, [p(1., 0., 1.), p(1., 1., 1.), p(0., 0., 1.)]);
+    assert_eq!(fan[3].1, [p(-1., 1., 1.), p(-1., 0., 1.), p(0., 0., 1.)]);
+    // Indexed list: 0 1 2, 1 3 2.
+    assert_eq!(triangles_of(&scene, 0)[1].1, [p(1., 0., 0.), p(1., 1., 0.), p(0., 1., 0.)]);
+}
+
+#[test]
+fn gltf_node_hierarchy_and_external_buffer() {
+    let scene = import("small/hierarchy.gltf");
+    // The default scene is scene 1 (root node 0); node 3 belongs to scene 0 only.
+    assert_eq!(scene.len(), 2);
+    let nodes: Vec<u32> = scene.sources.iter().map(|s| s.node).collect();
+    assert_eq!(nodes, [1, 4]);
+    assert!(scene.report.warnings.iter().any(|w| w.contains("2 scenes")), "{:?}", scene.report.warnings);
+    let v = scene.vertices();
+    // Node 0: T(1,2,3) · Rz(90°) · S(2). Node 1 (matrix): scale x by 3, then translate z by 10.
+    // Together (x, y, z) -> (1 - 2y, 2 + 6x, 23 + 2z).
+    let tol = 1e-5;
+    assert_close(v[0][0], [1.0, 2.0, 23.0], tol);
+    assert_close(v[0][1], [1.0, 8.0, 23.0], tol);
+    assert_close(v[0][2], [-1.0, 2.0, 23.0], tol);
+    // Node 2 translates x by 5; node 4 rotates 180° about x: (x, y, z) -> (1 + 2y, 12 + 2x, 3 - 2z).
+    assert_close(v[1][0], [1.0, 12.0, 3.0], tol);
+    assert_close(v[1][1], [1.0, 14.0, 3.0], tol);
+    assert_close(v[1][2], [3.0, 12.0, 3.0], tol);
+}
+
+#[test]
+fn two_inputs_in_one_scene() {
+    let scene = import_paths(&[fixture("small/groups.obj"), fixture("Box.gltf")]).unwrap();
+    assert_eq!(scene.len(), 22);
+    assert_eq!(scene.inputs.len(), 2);
+    assert_eq!((input_name(&scene, 0), input_name(&scene, 1)), ("groups.obj", "Box.gltf"));
+    assert_eq!((scene.inputs[0].triangle_count, scene.inputs[1].triangle_count), (10, 12));
+    let inputs: Vec<u32> = scene.sources.iter().map(|s| s.input).collect();
+    assert_eq!(inputs, [0, 0, 1]);
+    for (i, p) in scene.provenance.iter().enumerate() {
+        let expected_input = if i < 10 { 0 } else { 1 };
+        assert_eq!(scene.sources[p.source as usize].input, expected_input, "triangle {i}");
+    }
+    let hash = |name: &str| *blake3::hash(&std::fs::read(fixture(name)).unwrap()).as_bytes();
+    assert_eq!(scene.inputs[0].file_hash, hash("small/groups.obj"));
+    assert_eq!(scene.inputs[1].file_hash, hash("Box.gltf"));
+
+    // The same through a builder.
+    let mut builder = SceneBuilder::new();
+    import_path(&mut builder, &fixture("Box.gltf")).unwrap();
+    import_path(&mut builder, &fixture("bunny.obj")).unwrap();
+    let scene = builder.finish().unwrap();
+    assert_eq!(scene.len(), 12 + 3674);
+    assert_eq!((input_name(&scene, 0), input_name(&scene, 1)), ("Box.gltf", "bunny.obj"));
+}
+
+#[test]
+fn format_is_sniffed_when_the_extension_is_unknown_and_case_is_ignored() {
+    let dir = tempfile::tempdir().unwrap();
+    let copy = |from: &str, to: &str| {
+        let target = dir.path().join(to);
+        std::fs::copy(fixture(from), &target).unwrap();
+        target
+    };
+    let glb = copy("bunny_scene.glb", "scene.bin3");
+    let gltf = copy("Box.gltf", "box.json");
+    let obj = copy("bunny.obj", "bunny.mesh");
+    let upper = copy("Box.gltf", "BOX.GLTF");
+    let upper_obj = copy("small/missing_mtl.obj", "THING.OBJ");
+    assert_eq!(import_paths(&[glb]).unwrap().len(), 7350);
+    assert_eq!(import_paths(&[gltf]).unwrap().len(), 12);
+    assert_eq!(import_paths(&[obj]).unwrap().len(), 3674);
+    assert_eq!(import_paths(&[upper]).unwrap().len(), 12);
+    assert_eq!(import_paths(&[upper_obj]).unwrap().len(), 3);
+    let e = import_err("bad/unknown.xyz");
+    assert!(matches!(e, ImportError::UnknownFormat { .. }), "{e:?}");
+}
+
+// ---------------------------------------------------------------------------------------------
+// Bad inputs: each gives its own error, naming the file.
+
+#[test]
+fn obj_nan_vertex() {
+    match import_err("bad/nan_vertex.obj") {
+        ImportError::NonFinite { source_name, triangle, vertex, value, .. } => {
+            assert!(source_name.contains("spiky"), "{source_name}");
+            assert_eq!((triangle, vertex), (0, 2));
+            assert!(value[0].is_nan());
+        }
+        e => panic!("{e:?}"),
+    }
+}
+
+#[test]
+fn obj_huge_vertex() {
+    let e = import_err("bad/huge_vertex.obj");
+    assert!(matches!(&e, ImportError::TooLarge { source_name, .. } if source_name.contains("far_away")), "{e:?}");
+}
+
+#[test]
+fn obj_face_index_out_of_range() {
+    match import_err("bad/out_of_range.obj") {
+        ImportError::IndexOutOfRange { location, index, count, .. } => {
+            assert_eq!((index, count), (7, 3));
+            assert!(location.contains("line 6") && location.contains("broken"), "{location}");
+        }
+        e => panic!("{e:?}"),
+    }
+}
+
+#[test]
+fn obj_without_triangles() {
+    for name in ["bad/empty.obj", "bad/only_vertices.obj"] {
+        let e = import_err(name);
+        assert!(matches!(e, ImportError::NoTriangles { .. }), "{name}: {e:?}");
+    }
+}
+
+#[test]
+fn obj_that_is_not_a_mesh() {
+    let e = import_err("bad/x.obj");
+    assert!(matches!(&e, ImportError::Obj { message, .. } if message.contains("not an OBJ")), "{e:?}");
+    let e = import_err("bad/not_utf8.obj");
+    assert!(matches!(&e, ImportError::Obj { message, .. } if message.contains("UTF-8")), "{e:?}");
+    let e = import_err("bad/malformed_face.obj");
+    assert!(matches!(&e, ImportError::Obj { message, .. } if message.contains("line 5")), "{e:?}");
+}
+
+#[test]
+fn gltf_missing_external_buffer() {
+    let e = import_err("bad/missing_buffer.gltf");
+    assert!(matches!(&e, ImportError::Gltf { message, .. } if message.contains("missing_buffer.bin")), "{e:?}");
+}
+
+#[test]
+fn gltf_draco_and_unknown_required_extensions() {
+    match import_err("bad/draco.gltf") {
+        ImportError::UnsupportedExtension { location, extension, .. } => {
+            assert_eq!((location.as_str(), extension.as_str()), ("mesh 0 primitive 0", "KHR_draco_mesh_compression"));
+        }
+        e => panic!("{e:?}"),
+    }
+    match import_err("bad/required_unknown.gltf") {
+        ImportError::UnsupportedExtension { location, extension, .. } => {
+            assert_eq!((location.as_str(), extension.as_str()), ("document", "EXT_made_up_geometry"));
+        }
+        e => panic!("{e:?}"),
+    }
+}
+
+#[test]
+fn gltf_index_out_of_range() {
+    match import_err("bad/index_out_of_range.gltf") {
+        ImportError::IndexOutOfRange { location, index, count, .. } => {
+            assert_eq!((location.as_str(), index, count), ("mesh 0 primitive 0", 5, 3));
+        }
+        e => panic!("{e:?}"),
+    }
+}
+
+#[test]
+fn gltf_structural_errors() {
+    for (name, needle) in [
+        ("bad/accessor_overrun.gltf", "overrun buffer view 0"),
+        ("bad/node_cycle.gltf", "reached twice"),
+        ("bad/truncated.glb", "GLB"),
+        ("bad/not_json.gltf", "JSON"),
+    ] {
+        let e = import_err(name);
+        assert!(matches!(&e, ImportError::Gltf { message, .. } if message.contains(needle)), "{name}: {e:?}");
+    }
+    let e = import_err("bad/points_only.gltf");
+    assert!(matches!(e, ImportError::NoTriangles { .. }), "{e:?}");
+}
+
+#[test]
+fn missing_file_and_no_inputs() {
+    let e = import_err("bad/does_not_exist.obj");
+    assert!(matches!(e, ImportError::Io { .. }), "{e:?}");
+    let none: [&Path; 0] = [];
+    assert!(matches!(import_paths(&none), Err(ImportError::NoTriangles { .. })));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Hostile inputs: errors, never panics.
+
+/// A one-triangle glTF document with embedded data, for mutation.
+fn tiny_gltf() -> Value {
+    use std::io::Write;
+    let mut bin = Vec::new();
+    for v in [[0f32, 0., 0.], [1., 0., 0.], [0., 1., 0.]] {
+        for c in v {
+            bin.write_all(&c.to_le_bytes()).unwrap();
+        }
+    }
+    for i in [0u16, 1, 2, 0] {
+        bin.write_all(&i.to_le_bytes()).unwrap();
+    }
+    let b64 = base64_encode(&bin);
+    json!({
+        "asset": {"version": "2.0"},
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"mesh": 0}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]},
+            {"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"}
+        ],
+        "bufferViews": [{"buffer": 0, "byteLength": 36}, {"buffer": 0, "byteOffset": 36, "byteLength": 6}],
+        "buffers": [{"byteLength": 44, "uri": format!("data:application/octet-stream;base64,{b64}")}]
+    })
+}
+
+fn base64_encode(bytes: &[u8]) -> String {
+    const A: &[u8] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    let mut s = String::new();
+    for chunk in bytes.chunks(3) {
+        let b = [chunk[0], *chunk.get(1).unwrap_or(&0), *chunk.get(2).unwrap_or(&0)];
+        let n = (b[0] as u32) << 16 | (b[1] as u32) << 8 | b[2] as u32;
+        for k in 0..4 {
+            if k <= chunk.len() {
+                s.push(A[(n >> (18 - 6 * k) & 63) as usize] as char);
+            } else {
+                s.push('=');
+            }
+        }
+    }
+    s
+}
+
+fn import_json(dir: &Path, name: &str, doc: &Value) -> Result<Scene, ImportError> {
+    let path = dir.join(name);
+    std::fs::write(&path, serde_json::to_vec(doc).unwrap()).unwrap();
+    import_paths(&[path])
+}
+
+#[test]
+fn hostile_gltf_documents_are_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    assert_eq!(import_json(dir.path(), "ok.gltf", &tiny_gltf()).unwrap().len(), 1);
+    type Edit = fn(&mut Value);
+    let cases: &[(&str, Edit)] = &[
+        ("position accessor out of range", |d| d["meshes"][0]["primitives"][0]["attributes"]["POSITION"] = json!(9)),
+        ("indices accessor out of range", |d| d["meshes"][0]["primitives"][0]["indices"] = json!(9)),
+        ("zero count", |d| d["accessors"][0]["count"] = json!(0)),
+        ("huge count", |d| d["accessors"][0]["count"] = json!(u64::MAX)),
+        ("huge offset", |d| d["accessors"][0]["byteOffset"] = json!(u64::MAX - 3)),
+        ("huge view offset", |d| d["bufferViews"][0]["byteOffset"] = json!(u64::MAX - 3)),
+        ("huge view length", |d| d["bufferViews"][0]["byteLength"] = json!(u64::MAX)),
+        ("stride too small", |d| d["bufferViews"][0]["byteStride"] = json!(4)),
+        ("stride zero", |d| d["bufferViews"][0]["byteStride"] = json!(0)),
+        ("float indices", |d| d["accessors"][1]["componentType"] = json!(5126)),
+        ("vec3 indices", |d| d["accessors"][1]["type"] = json!("VEC3")),
+        ("vec2 positions", |d| d["accessors"][0]["type"] = json!("VEC2")),
+        ("short positions", |d| d["accessors"][0]["componentType"] = json!(5123)),
+        ("bad mode", |d| d["meshes"][0]["primitives"][0]["mode"] = json!(9)),
+        ("missing node", |d| d["scenes"][0]["nodes"] = json!([5])),
+        ("self child", |d| d["nodes"][0]["children"] = json!([0])),
+        ("two parents", |d| {
+            d["nodes"] = json!([{"children": [2]}, {"children": [2]}, {"mesh": 0}]);
+            d["scenes"][0]["nodes"] = json!([0, 1]);
+        }),
+        ("missing buffer view", |d| d["accessors"][0]["bufferView"] = json!(7)),
+        ("short buffer", |d| d["buffers"][0]["byteLength"] = json!(4000)),
+        ("bad base64", |d| d["buffers"][0]["uri"] = json!("data:application/octet-stream;base64,@@@@")),
+        ("invalid percent-encoding", |d| d["buffers"][0]["uri"] = json!("%FF%FE.bin")),
+        ("http uri", |d| d["buffers"][0]["uri"] = json!("http://example.invalid/x.bin")),
+        ("sparse zero count", |d| {
+            d["accessors"][0]["sparse"] = json!({"count": 0, "indices": {"bufferView": 1, "componentType": 5123},
+                "values": {"bufferView": 0}});
+        }),
+        ("sparse only, huge", |d| {
+            d["accessors"][0].as_object_mut().unwrap().remove("bufferView");
+            d["accessors"][0]["count"] = json!(1u64 << 40);
+            d["accessors"][0]["sparse"] = json!({"count": 1, "indices": {"bufferView": 1, "componentType": 5123},
+                "values": {"bufferView": 0}});
+        }),
+        ("sparse values overrun", |d| {
+            d["accessors"][0]["sparse"] = json!({"count": 3, "indices": {"bufferView": 1, "componentType": 5123},
+                "values": {"bufferView": 0, "byteOffset": 12}});
+        }),
+        ("index out of range", |d| d["accessors"][0]["count"] = json!(2)),
+        ("meshopt required", |d| {
+            d["extensionsRequired"] = json!(["EXT_meshopt_compression"]);
+            d["bufferViews"][0]["extensions"] = json!({"EXT_meshopt_compression": {}});
+        }),
+        ("no asset", |d| {
+            d.as_object_mut().unwrap().remove("asset");
+        }),
+        ("array", |d| *d = json!([1, 2, 3])),
+    ];
+    for (what, edit) in cases {
+        let mut doc = tiny_gltf();
+        edit(&mut doc);
+        let result = import_json(dir.path(), "hostile.gltf", &doc);
+        assert!(result.is_err(), "{what}: imported {} triangles", result.unwrap().len());
+        let e = result.unwrap_err();
+        assert!(e.to_string().contains("hostile.gltf"), "{what}: {e}");
+        if *what == "meshopt required" {
+            assert!(
+                matches!(&e, ImportError::UnsupportedExtension { location, .. } if location == "mesh 0 primitive 0"),
+                "{e:?}"
+            );
+        }
+        if *what == "index out of range" {
+            assert!(matches!(e, ImportError::IndexOutOfRange { index: 2, count: 2, .. }), "{what}: {e:?}");
+        }
+        if std::env::var_os("VLF_SHOW_ERRORS").is_some() {
+            eprintln!("{what}: {e}");
+        }
+    }
+
+    // Harmless deviations are accepted: no POSITION bounds, a geometry-neutral required extension,
+    // a primitive without POSITION (skipped with a warning).
+    let mut doc = tiny_gltf();
+    doc["accessors"][0].as_object_mut().unwrap().remove("min");
+    doc["accessors"][0].as_object_mut().unwrap().remove("max");
+    doc["extensionsUsed"] = json!(["KHR_materials_unlit"]);
+    doc["extensionsRequired"] = json!(["KHR_materials_unlit"]);
+    doc["meshes"][0]["primitives"].as_array_mut().unwrap().push(json!({"attributes": {"NORMAL": 0}, "indices": 1}));
+    let scene = import_json(dir.path(), "lenient.gltf", &doc).unwrap();
+    assert_eq!(scene.len(), 1);
+    assert!(scene.report.warnings.iter().any(|w| w.contains("no POSITION")), "{:?}", scene.report.warnings);
+
+    // A sparse accessor without a buffer view: three zero vertices, of which 1 and 2 are replaced
+    // (indices 1, 2 from byte 2 of the index view; values from vertex 1 of the position view).
+    let mut doc = tiny_gltf();
+    let position = doc["accessors"][0].as_object_mut().unwrap();
+    position.remove("bufferView");
+    position.insert(
+        "sparse".into(),
+        json!({"count": 2, "indices": {"bufferView": 1, "byteOffset": 2, "componentType": 5123},
+            "values": {"bufferView": 0, "byteOffset": 12}}),
+    );
+    let scene = import_json(dir.path(), "sparse.gltf", &doc).unwrap();
+    assert_eq!(scene.vertices(), [[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]]);
+}
+
+#[test]
+fn hostile_obj_texts_are_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases = [
+        ("huge texture index", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/9223372036854775807 2/1 3/1\n"),
+        ("very negative texture index", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/-9223372036854775808 2/1 3/1\n"),
+        ("huge normal index", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//4611686018427387904 2//1 3//1\n"),
+        ("zero index", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n"),
+        ("relative index before the start", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf -1 -2 -4\n"),
+        ("four components", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/1/1/1 2 3\n"),
+        ("empty face", "v 0 0 0\nf\n"),
+        ("w zero", "v 0 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"),
+        ("five numbers", "v 0 0 0 1 1\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"),
+        ("two numbers", "v 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"),
+        ("usemtl without name", "v 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl\nf 1 2 3\n"),
+        ("infinite", "v 0 0 0\nv 1 0 0\nv 0 inf 0\nf 1 2 3\n"),
+    ];
+    for (what, text) in cases {
+        let path = dir.path().join("hostile.obj");
+        std::fs::write(&path, text).unwrap();
+        let result = import_paths(&[&path]);
+        assert!(result.is_err(), "{what}: imported {} triangles", result.unwrap().len());
+        let e = result.unwrap_err();
+        assert!(e.to_string().contains("hostile.obj"), "{what}: {e}");
+        if std::env::var_os("VLF_SHOW_ERRORS").is_some() {
+            eprintln!("{what}: {e}");
+        }
+    }
+
+    // A material library whose colour line is short (tobj's own MTL parser panics on it) and a
+    // usemtl naming an undefined material: imported, with a warning for the latter.
+    std::fs::write(dir.path().join("short.mtl"), "newmtl a\nKd 1 2\nnewmtl b\n").unwrap();
+    let path = dir.path().join("materials.obj");
+    std::fs::write(&path, "mtllib short.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl b\nf 1 2 3\nusemtl zz\nf 1 3 2\n")
+        .unwrap();
+    let scene = import_paths(&[&path]).unwrap();
+    assert_eq!(scene.len(), 2);
+    let materials: Vec<u32> = scene.sources.iter().map(|s| s.material).collect();
+    assert_eq!(materials, [1, NO_INDEX]);
+    assert!(scene.report.warnings.iter().any(|w| w.contains("\"zz\"")), "{:?}", scene.report.warnings);
+}
+
+/// Deterministic mutations of every small fixture (truncations and byte changes): whatever the
+/// importers make of them, they return.
+#[test]
+fn mutated_fixtures_never_panic() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut state = 0x9E37_79B9_7F4A_7C15u64;
+    let mut next = move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        state
+    };
+    for name in ["small/groups.obj", "small/modes.gltf", "small/hierarchy.gltf", "Box.gltf", "bunny_scene.glb"] {
+        let original = std::fs::read(fixture(name)).unwrap();
+        let ext = Path::new(name).extension().unwrap().to_str().unwrap();
+        std::fs::copy(fixture("small/hierarchy.bin"), dir.path().join("hierarchy.bin")).unwrap();
+        for round in 0..150 {
+            let mut bytes = original.clone();
+            if round % 3 == 0 {
+                bytes.truncate(next() as usize % bytes.len());
+            } else {
+                // glTF: hit the JSON (where the structure is) more often than the binary data.
+                let span = if ext == "glb" { 2000.min(bytes.len()) } else { bytes.len() };
+                for _ in 0..1 + next() % 4 {
+                    let at = next() as usize % span;
+                    bytes[at] = b"0123456789-:,[]{}\"e./ \n"[next() as usize % 23];
+                }
+            }
+            let path = dir.path().join(format!("mutant.{ext}"));
+            std::fs::write(&path, &bytes).unwrap();
+            let _ = import_paths(&[&path]);
+        }
+    }
+}

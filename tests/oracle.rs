@@ -1,0 +1,88 @@
+//! Every acceleration path against the brute-force oracle, over many scene families and ray
+//! families (see `vlf_tests` for what "exact" means). Over a million rays in all.
+
+use vlf_bake::generate;
+use vlf_bake::{DepthPolicy, Scene};
+use vlf_tests::{bake, check_field};
+
+fn depth(leaf_size: u32, max_depth: u32) -> DepthPolicy {
+    DepthPolicy { leaf_size, max_depth }
+}
+
+fn run(label: &str, tris: &[[[f32; 3]; 3]], configs: &[(u32, u32, DepthPolicy)], per_family: usize) -> u64 {
+    let scene = Scene::from_triangles(label, tris).expect("scene");
+    let kept = scene.vertices();
+    let mut rays = 0;
+    for (i, &(l, n, d)) in configs.iter().enumerate() {
+        let (_dir, field) = bake(&scene, l, n, d);
+        rays += check_field(&format!("{label} (l={l}, n={n}, {d:?})"), &field, &kept, per_family, 17 + i as u64).rays;
+    }
+    rays
+}
+
+#[test]
+fn random_triangles_in_a_cube() {
+    // The paper's scene family, at coarse and fine resolutions, with and without BSP.
+    let tris = generate::random_cube(1500, 0.08, 1);
+    let rays = run(
+        "random cube",
+        &tris,
+        &[(3, 4, depth(4, 8)), (19, 16, depth(4, 8)), (129, 32, depth(2, 10)), (51, 64, depth(1, 0))],
+        12_000,
+    );
+    assert!(rays >= 280_000);
+}
+
+#[test]
+fn coplanar_grids_with_shared_edges() {
+    // Integer grids: rays exactly in the planes, along grid lines and through shared vertices.
+    let tris = generate::grid(12, 4, 0.25);
+    run("grid", &tris, &[(9, 8, depth(4, 8)), (129, 48, depth(2, 6))], 12_000);
+}
+
+#[test]
+fn long_thin_slivers() {
+    let tris = generate::slivers(800, 3);
+    run("slivers", &tris, &[(19, 16, depth(4, 8)), (129, 64, depth(4, 8))], 12_000);
+}
+
+#[test]
+fn degenerate_triangles_are_dropped_and_the_rest_is_exact() {
+    let tris = generate::with_degenerates(600, 5);
+    let scene = Scene::from_triangles("degenerate", &tris).unwrap();
+    assert_eq!(scene.report.dropped_degenerate, 600);
+    assert_eq!(scene.len(), 600);
+    run("degenerate mix", &tris, &[(33, 24, depth(4, 8))], 12_000);
+}
+
+#[test]
+fn rays_from_inside_a_closed_box_always_hit() {
+    // Watertightness end to end: from inside a closed mesh every ray must hit, through edges
+    // and corners included.
+    let tris = generate::closed_box([-1.0, -0.5, -0.25], [1.0, 0.5, 0.25]);
+    let scene = Scene::from_triangles("box", &tris).unwrap();
+    let (_dir, field) = bake(&scene, 51, 16, depth(4, 8));
+    let mut rng = generate::Rng::new(9);
+    let mut misses = 0;
+    for i in 0..100_000 {
+        let o = [rng.range(-0.9, 0.9) as f32, rng.range(-0.4, 0.4) as f32, rng.range(-0.2, 0.2) as f32];
+        // Aim at box edges and corners exactly half the time.
+        let target: [f32; 3] = if i % 2 == 0 {
+            let corner = |s: f64, lo: f32, hi: f32| if s < 0.5 { lo } else { hi };
+            let mut p = [corner(rng.unit(), -1.0, 1.0), corner(rng.unit(), -0.5, 0.5), corner(rng.unit(), -0.25, 0.25)];
+            let axis = (rng.next_u64() % 4) as usize;
+            if axis < 3 {
+                let (lo, hi) = [(-1.0, 1.0), (-0.5, 0.5), (-0.25, 0.25)][axis];
+                p[axis] = rng.range(lo, hi) as f32;
+            }
+            p
+        } else {
+            [rng.range(-2.0, 2.0) as f32, rng.range(-2.0, 2.0) as f32, rng.range(-2.0, 2.0) as f32]
+        };
+        let d = [target[0] - o[0], target[1] - o[1], target[2] - o[2]];
+        if field.closest_hit(&vlf_geom::Ray::new(o, d)).is_none() {
+            misses += 1;
+        }
+    }
+    assert_eq!(misses, 0, "rays escaped a closed box");
+}
