@@ -86,3 +86,35 @@ fn rays_from_inside_a_closed_box_always_hit() {
     }
     assert_eq!(misses, 0, "rays escaped a closed box");
 }
+
+/// Imports a fixture mesh as the CLI would.
+fn fixture_scene(name: &str) -> Scene {
+    vlf_bake::import::import_paths(&[vlf_tests::fixtures().join("meshes").join(name)]).expect("fixture imports")
+}
+
+fn run_scene(label: &str, scene: &Scene, configs: &[(u32, u32, DepthPolicy)], per_family: usize) -> u64 {
+    let kept = scene.vertices();
+    let mut rays = 0;
+    for (i, &(l, n, d)) in configs.iter().enumerate() {
+        let (_dir, field) = bake(scene, l, n, d);
+        rays += check_field(&format!("{label} (l={l}, n={n}, {d:?})"), &field, &kept, per_family, 91 + i as u64).rays;
+    }
+    rays
+}
+
+#[test]
+fn the_stanford_bunny_scan() {
+    let scene = fixture_scene("bunny.obj");
+    assert_eq!(scene.len(), 3674);
+    run_scene("bunny.obj", &scene, &[(33, 32, depth(4, 8)), (513, 64, depth(4, 8))], 20_000);
+}
+
+#[test]
+fn a_gltf_scene_with_node_transforms() {
+    // Two bunny instances under rotation, scale and translation, plus a ground quad.
+    let scene = fixture_scene("bunny_scene.glb");
+    assert_eq!(scene.len(), 7350);
+    run_scene("bunny_scene.glb", &scene, &[(129, 48, depth(4, 8))], 16_000);
+    let boxed = fixture_scene("Box.gltf");
+    run_scene("Box.gltf", &boxed, &[(19, 8, depth(1, 4))], 8_000);
+}

@@ -22,5 +22,5 @@ pub mod writer;
 pub use error::{FormatError, hex};
 pub use layout::*;
 pub use reader::{FieldReader, content_hash, read_header_and_table};
-pub use verify::{VerifyReport, recount_statistics, verify};
+pub use verify::{VerifyReport, verify};
 pub use writer::{HashingWriter, Payload, SectionPayload, write_field};

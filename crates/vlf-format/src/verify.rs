@@ -202,8 +202,8 @@ fn check_triangles_and_provenance(f: &FieldReader<'_>) -> Result<(), FormatError
     Ok(())
 }
 
-/// Recounts STATISTICS from the tiles.
-pub fn recount_statistics(f: &FieldReader<'_>) -> StatisticsRecord {
+/// Recounts STATISTICS from the tiles. Only sound after `check_beams_tiles_leaves` passed.
+fn recount_statistics(f: &FieldReader<'_>) -> StatisticsRecord {
     let n2 = f.params.tile_resolution as usize * f.params.tile_resolution as usize;
     let mut s = StatisticsRecord::zeroed_record();
     s.tile_count = f.tiles.len() as u64;

@@ -316,7 +316,9 @@ impl<'a> FieldView<'a> {
         let leaf_of = |t: f64| (((oz + t * dz - z0) / h).floor() as i64).clamp(0, count - 1);
         let (first, last) = (leaf_of(lo), leaf_of(hi));
         let step = if dz > 0.0 { 1 } else { -1 };
-        let base = beam.leaf_base as usize + tile.first_leaf as usize;
+        // File-supplied bases: saturate, so an absurd value fails the bounds check instead of
+        // overflowing.
+        let base = (beam.leaf_base as usize).saturating_add(tile.first_leaf as usize);
         let mut k = first;
         loop {
             let leaf_exit = if k == last {
@@ -326,7 +328,7 @@ impl<'a> FieldView<'a> {
                 ((boundary - oz) / dz).min(hi)
             };
             counter.leaf();
-            if let Some(ids) = self.leaf_ids(beam, base + k as usize) {
+            if let Some(ids) = self.leaf_ids(beam, base.saturating_add(k as usize)) {
                 if let Visit::Done = visit(ids, leaf_exit, counter) {
                     return Visit::Done;
                 }
@@ -341,8 +343,8 @@ impl<'a> FieldView<'a> {
     /// The ids of leaf `leaf` (an index into LEAF_BOUNDS), if the file's bounds are sane.
     #[inline(always)]
     fn leaf_ids(&self, beam: &BeamRecord, leaf: usize) -> Option<&'a [u32]> {
-        let b = self.reader.leaf_bounds.get(leaf..leaf + 2)?;
+        let b = self.reader.leaf_bounds.get(leaf..leaf.checked_add(2)?)?;
         let base = beam.id_base as usize;
-        self.reader.triangle_ids.get(base + b[0] as usize..base + b[1] as usize)
+        self.reader.triangle_ids.get(base.checked_add(b[0] as usize)?..base.checked_add(b[1] as usize)?)
     }
 }
