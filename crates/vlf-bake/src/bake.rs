@@ -219,15 +219,19 @@ pub fn bake_direction(
         }
         let (zmin, zmax) =
             entries.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), en| (a.min(en.z0), b.max(en.z1)));
-        // Quantise outward; a non-empty tile has z_lo < z_hi.
-        let q_lo = (((zmin + r) / z_step).floor().max(0.0) as u32).min(Z_LEVELS - 1);
-        let q_hi = (((zmax + r) / z_step).ceil() as u32).clamp(q_lo + 1, Z_LEVELS);
+        // Quantise outward; a non-empty tile has z_lo < z_hi. (Casts truncate toward zero, which
+        // equals floor here because negative values clamp to 0 anyway, and avoids a libm call.)
+        let q_lo = (((zmin + r) / z_step) as i64).clamp(0, Z_LEVELS as i64 - 1) as u32;
+        let above = (zmax + r) / z_step;
+        let q_hi =
+            (above as i64 + ((above as i64 as f64) < above) as i64).clamp(q_lo as i64 + 1, Z_LEVELS as i64) as u32;
         let z0 = -r + q_lo as f64 * z_step;
         let z1 = -r + q_hi as f64 * z_step;
         let depth = params.depth.depth_for(entries.len() as u64);
         let count = 1usize << depth;
         let h = (z1 - z0) / count as f64;
-        let leaf_of = |z: f64| (((z - z0) / h).floor() as i64).clamp(0, count as i64 - 1) as usize;
+        // Truncation equals floor under the clamp (see above); the runtime computes the same.
+        let leaf_of = |z: f64| (((z - z0) / h) as i64).clamp(0, count as i64 - 1) as usize;
 
         // Push each triangle to the leaves its (clipped, grown) z range overlaps: count, then fill.
         s.leaf_fill.clear();

@@ -13,6 +13,19 @@
 /// A vertex in the canonical frame: `(u, v)` in tile units, `z` in world units.
 pub type P = [f64; 3];
 
+/// `floor` without a libm call (baseline x86-64 has no rounding instruction); exact for the
+/// magnitudes here (tile coordinates, far below 2^52).
+#[inline(always)]
+fn floor(x: f64) -> f64 {
+    let t = x as i64 as f64;
+    if t > x { t - 1.0 } else { t }
+}
+
+#[inline(always)]
+fn ceil(x: f64) -> f64 {
+    -floor(-x)
+}
+
 /// A convex polygon of at most 9 vertices (a triangle clipped by 4 planes has at most 7).
 #[derive(Clone, Copy)]
 pub struct Poly {
@@ -21,10 +34,13 @@ pub struct Poly {
 }
 
 impl Poly {
+    pub const EMPTY: Poly = Poly { pts: [[0.0; 3]; 9], len: 0 };
+
     pub fn triangle(a: P, b: P, c: P) -> Self {
-        let mut pts = [[0.0; 3]; 9];
-        pts[..3].copy_from_slice(&[a, b, c]);
-        Poly { pts, len: 3 }
+        let mut p = Poly::EMPTY;
+        p.pts[..3].copy_from_slice(&[a, b, c]);
+        p.len = 3;
+        p
     }
 
     pub fn points(&self) -> &[P] {
@@ -40,85 +56,104 @@ impl Poly {
         self.points().iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| (lo.min(p[axis]), hi.max(p[axis])))
     }
 
-    /// The part of the polygon with `lo ≤ p[axis] ≤ hi` (Sutherland–Hodgman against two planes).
-    pub fn clip(&self, axis: usize, lo: f64, hi: f64) -> Poly {
-        let (min, max) = self.range(axis);
-        if min >= lo && max <= hi {
-            return *self;
-        }
-        if max < lo || min > hi {
-            return Poly { pts: [[0.0; 3]; 9], len: 0 };
-        }
-        self.clip_plane(axis, lo, 1.0).clip_plane(axis, hi, -1.0)
+    /// Writes into `out` the part of the polygon with `lo ≤ p[axis] ≤ hi` (Sutherland–Hodgman
+    /// against both planes in one pass over a scratch polygon).
+    pub fn clip_into(&self, axis: usize, lo: f64, hi: f64, out: &mut Poly) {
+        let mut mid = Poly::EMPTY;
+        clip_plane(self, axis, lo, 1.0, &mut mid);
+        clip_plane(&mid, axis, hi, -1.0, out);
     }
 
-    /// Keeps the side where `sign · (p[axis] − at) ≥ 0`.
-    fn clip_plane(&self, axis: usize, at: f64, sign: f64) -> Poly {
-        let mut out = Poly { pts: [[0.0; 3]; 9], len: 0 };
-        let n = self.len;
-        if n == 0 {
-            return out;
-        }
-        let mut push = |p: P| {
-            if out.len < out.pts.len() {
-                out.pts[out.len] = p;
-                out.len += 1;
+    /// The range of `z` over the part of the polygon with `lo ≤ p[axis] ≤ hi`, or `None` if that
+    /// part is empty. The extremes of a linear function over a convex polygon clipped by a slab lie
+    /// at the clipped polygon's vertices: original vertices inside the slab and the crossings of
+    /// edges with the slab's planes, so no polygon is built.
+    pub fn z_range_in_slab(&self, axis: usize, lo: f64, hi: f64) -> Option<(f64, f64)> {
+        let (mut zmin, mut zmax) = (f64::INFINITY, f64::NEG_INFINITY);
+        let pts = self.points();
+        for (i, &p) in pts.iter().enumerate() {
+            if p[axis] >= lo && p[axis] <= hi {
+                zmin = zmin.min(p[2]);
+                zmax = zmax.max(p[2]);
             }
-        };
-        for i in 0..n {
-            let a = self.pts[i];
-            let b = self.pts[(i + 1) % n];
-            let da = sign * (a[axis] - at);
-            let db = sign * (b[axis] - at);
-            if da >= 0.0 {
-                push(a);
-            }
-            if (da >= 0.0) != (db >= 0.0) {
-                let t = da / (da - db);
-                let mut p = [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]), a[2] + t * (b[2] - a[2])];
-                p[axis] = at; // exactly on the plane
-                push(p);
+            let q = pts[(i + 1) % pts.len()];
+            for at in [lo, hi] {
+                let (dp, dq) = (p[axis] - at, q[axis] - at);
+                if (dp < 0.0 && dq > 0.0) || (dp > 0.0 && dq < 0.0) {
+                    let z = p[2] + dp / (dp - dq) * (q[2] - p[2]);
+                    zmin = zmin.min(z);
+                    zmax = zmax.max(z);
+                }
             }
         }
-        out
+        (zmin <= zmax).then_some((zmin, zmax))
+    }
+}
+
+/// Keeps the side of `poly` where `sign · (p[axis] − at) ≥ 0`, writing to `out`.
+fn clip_plane(poly: &Poly, axis: usize, at: f64, sign: f64, out: &mut Poly) {
+    out.len = 0;
+    let n = poly.len;
+    for i in 0..n {
+        let a = poly.pts[i];
+        let b = poly.pts[if i + 1 == n { 0 } else { i + 1 }];
+        let da = sign * (a[axis] - at);
+        let db = sign * (b[axis] - at);
+        if da >= 0.0 && out.len < 9 {
+            out.pts[out.len] = a;
+            out.len += 1;
+        }
+        if (da >= 0.0) != (db >= 0.0) && out.len < 9 {
+            let t = da / (da - db);
+            let mut p = [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]), a[2] + t * (b[2] - a[2])];
+            p[axis] = at; // exactly on the plane
+            out.pts[out.len] = p;
+            out.len += 1;
+        }
     }
 }
 
 /// Calls `emit(column, row, z_lo, z_hi)` for every tile of an `n × n` grid whose closed square,
 /// grown by `e` tile units on every side, meets the triangle `a, b, c`; `z_lo..z_hi` is the z range
 /// of the triangle inside that grown prism. Tiles are emitted row by row, columns ascending.
+#[inline]
 pub fn rasterize(a: P, b: P, c: P, n: u32, e: f64, mut emit: impl FnMut(u32, u32, f64, f64)) {
     let last = n as f64 - 1.0;
     // Smallest and largest tile index whose grown closed interval [k − e, k + 1 + e] meets [lo, hi].
-    let first_cell = |lo: f64| (lo - e - 1.0).ceil().clamp(0.0, last) as u32;
-    let last_cell = |hi: f64| (hi + e).floor().clamp(0.0, last) as u32;
+    let first_cell = |lo: f64| ceil(lo - e - 1.0).clamp(0.0, last) as u32;
+    let last_cell = |hi: f64| floor(hi + e).clamp(0.0, last) as u32;
     let (umin, umax) = (a[0].min(b[0]).min(c[0]), a[0].max(b[0]).max(c[0]));
     let (vmin, vmax) = (a[1].min(b[1]).min(c[1]), a[1].max(b[1]).max(c[1]));
     let (ix0, ix1) = (first_cell(umin), last_cell(umax));
     let (iy0, iy1) = (first_cell(vmin), last_cell(vmax));
+    let tri = Poly::triangle(a, b, c);
     if ix0 == ix1 && iy0 == iy1 {
         // The whole triangle lies in one tile's grown prism: no clipping needed.
-        let zlo = a[2].min(b[2]).min(c[2]);
-        let zhi = a[2].max(b[2]).max(c[2]);
-        emit(ix0, iy0, zlo, zhi);
+        let (z0, z1) = tri.range(2);
+        emit(ix0, iy0, z0, z1);
         return;
     }
-    let tri = Poly::triangle(a, b, c);
+    let mut row = Poly::EMPTY;
     for iy in iy0..=iy1 {
-        let row = tri.clip(1, iy as f64 - e, iy as f64 + 1.0 + e);
+        let row = if iy0 == iy1 {
+            &tri
+        } else {
+            tri.clip_into(1, iy as f64 - e, iy as f64 + 1.0 + e, &mut row);
+            &row
+        };
         if row.is_empty() {
             continue;
         }
         let (ru0, ru1) = row.range(0);
-        let (row_z0, row_z1) = row.range(2);
-        for ix in first_cell(ru0).max(ix0)..=last_cell(ru1).min(ix1) {
-            let cell = row.clip(0, ix as f64 - e, ix as f64 + 1.0 + e);
-            let (z0, z1) = if cell.is_empty() {
-                // Rounding at a corner: the row's range is a safe superset.
-                (row_z0, row_z1)
-            } else {
-                cell.range(2)
-            };
+        let (cx0, cx1) = (first_cell(ru0).max(ix0), last_cell(ru1).min(ix1));
+        if cx0 == cx1 {
+            let (z0, z1) = row.range(2);
+            emit(cx0, iy, z0, z1);
+            continue;
+        }
+        for ix in cx0..=cx1 {
+            // Rounding at a corner can leave the slab empty: the row's range is a safe superset.
+            let (z0, z1) = row.z_range_in_slab(0, ix as f64 - e, ix as f64 + 1.0 + e).unwrap_or_else(|| row.range(2));
             emit(ix, iy, z0, z1);
         }
     }

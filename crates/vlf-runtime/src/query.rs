@@ -240,7 +240,8 @@ impl<'a> FieldView<'a> {
         let (w, r) = (self.tile_width, self.radius);
         // Tile coordinates of the entry point, clamped: the grown sphere pokes out of the square
         // by at most the margin, where no triangle lies.
-        let cell = |v: f64| (((v + r) * self.inv_tile_width).floor() as i64).clamp(0, n - 1);
+        // (Truncation equals floor under the clamp to [0, n−1], without a libm call.)
+        let cell = |v: f64| (((v + r) * self.inv_tile_width) as i64).clamp(0, n - 1);
         let mut ix = cell(s.o[0] + s.t0 * s.d[0]);
         let mut iy = cell(s.o[1] + s.t0 * s.d[1]);
         // Parameter of the next tile boundary on each axis, and the parameter step between them.
@@ -313,7 +314,7 @@ impl<'a> FieldView<'a> {
         }
         let count = 1i64 << tile.depth;
         let h = (z1 - z0) / count as f64;
-        let leaf_of = |t: f64| (((oz + t * dz - z0) / h).floor() as i64).clamp(0, count - 1);
+        let leaf_of = |t: f64| (((oz + t * dz - z0) / h) as i64).clamp(0, count - 1);
         let (first, last) = (leaf_of(lo), leaf_of(hi));
         let step = if dz > 0.0 { 1 } else { -1 };
         // File-supplied bases: saturate, so an absurd value fails the bounds check instead of
