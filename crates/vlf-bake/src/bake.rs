@@ -35,8 +35,8 @@ pub const MARGIN_FRACTION: f64 = 1.0 / (1u64 << 20) as f64;
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum BakeError {
-    #[error("cannot write {path}: {source}")]
-    Io { path: PathBuf, source: io::Error },
+    #[error("cannot write {path}: {error}")]
+    Io { path: PathBuf, error: io::Error },
     #[error("{0}")]
     Params(String),
     #[error(
@@ -335,10 +335,15 @@ pub struct Statistics {
 }
 
 impl Statistics {
+    /// Digests a record as stored; saturating, because an unverified file may hold anything.
     pub fn from_record(s: &StatisticsRecord) -> Self {
-        let nonempty = s.tile_count - s.empty_tiles;
-        let used = (s.max_depth_used as usize + 1).min(32);
-        let depth_sum: u64 = s.depth_histogram.iter().enumerate().map(|(d, c)| d as u64 * c).sum();
+        let nonempty = s.tile_count.saturating_sub(s.empty_tiles);
+        let used = (s.max_depth_used as usize).saturating_add(1).min(32);
+        let depth_sum = s
+            .depth_histogram
+            .iter()
+            .enumerate()
+            .fold(0u64, |acc, (d, c)| acc.saturating_add((d as u64).saturating_mul(*c)));
         let ratio = |a: u64, b: u64| if b == 0 { 0.0 } else { a as f64 / b as f64 };
         Statistics {
             tiles: s.tile_count,
@@ -413,7 +418,7 @@ pub fn bake_to_path(
         Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
         _ => PathBuf::from("."),
     };
-    let io_err = |source: io::Error| BakeError::Io { path: output.to_path_buf(), source };
+    let io_err = |error: io::Error| BakeError::Io { path: output.to_path_buf(), error };
 
     let lattice = Lattice::new(params.lattice_n);
     let directions = lattice.directions();
@@ -543,7 +548,13 @@ pub fn write_atomically<T>(
     write: impl FnOnce(&mut BufWriter<File>) -> io::Result<T>,
 ) -> io::Result<T> {
     let name = path.file_name().map_or("field".into(), |n| n.to_string_lossy().into_owned());
-    let tmp = tempfile::Builder::new().prefix(&format!(".{name}.")).suffix(".tmp").tempfile_in(dir)?;
+    let prefix = format!(".{name}.");
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(&prefix).suffix(".tmp");
+    // A new file's usual permissions (0666 less the umask), not tempfile's private 0600.
+    #[cfg(unix)]
+    builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
+    let tmp = builder.tempfile_in(dir)?;
     let (file, tmp_path) = tmp.into_parts();
     let mut w = BufWriter::with_capacity(1 << 20, file);
     let value = write(&mut w)?;

@@ -17,8 +17,8 @@ pub const MAX_COORDINATE: f32 = 1.0e18;
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum ImportError {
-    #[error("cannot read {path}: {source}")]
-    Io { path: PathBuf, source: std::io::Error },
+    #[error("cannot read {path}: {error}")]
+    Io { path: PathBuf, error: std::io::Error },
     #[error("{path}: unknown mesh format (expected .obj, .gltf or .glb)")]
     UnknownFormat { path: PathBuf },
     #[error("{path}: not a valid OBJ file: {message}")]

@@ -29,15 +29,22 @@ pub use query::{Counter, FieldView, TraceStats};
 pub use vlf_format::{FieldReader, FormatError, hex};
 pub use vlf_geom::{Hit, Intersector, Ray};
 
-/// Why a field could not be opened.
+/// Why a field could not be opened. Each message is one self-contained line that includes the
+/// underlying cause (so the cause is not repeated as a `source()`).
 #[derive(Debug, thiserror::Error)]
 pub enum OpenError {
-    #[error("cannot read field {path}: {source}")]
-    Io { path: PathBuf, source: std::io::Error },
-    #[error("{path} is not a valid field: {source}")]
-    Format { path: PathBuf, source: FormatError },
+    #[error("cannot read field {path}: {error}")]
+    Io { path: PathBuf, error: std::io::Error },
+    #[error("{path} is not a valid field: {error}")]
+    Format { path: PathBuf, error: FormatError },
     #[error("not a valid field: {0}")]
-    Bytes(#[from] FormatError),
+    Bytes(FormatError),
+}
+
+impl From<FormatError> for OpenError {
+    fn from(e: FormatError) -> Self {
+        OpenError::Bytes(e)
+    }
 }
 
 /// Where a field's bytes live.
@@ -110,7 +117,7 @@ impl Field {
     /// operating system raise `SIGBUS` on access. If you cannot rule that out, use [`Field::read`].
     pub fn open(path: impl AsRef<Path>) -> Result<Field, OpenError> {
         let path = path.as_ref();
-        let io = |source| OpenError::Io { path: path.to_owned(), source };
+        let io = |error| OpenError::Io { path: path.to_owned(), error };
         let file = File::open(path).map_err(io)?;
         let len = file.metadata().map_err(io)?.len();
         if len < vlf_format::HEADER_SIZE as u64 {
@@ -132,7 +139,7 @@ impl Field {
     /// the file size).
     pub fn read(path: impl AsRef<Path>) -> Result<Field, OpenError> {
         let path = path.as_ref();
-        let bytes = std::fs::read(path).map_err(|source| OpenError::Io { path: path.to_owned(), source })?;
+        let bytes = std::fs::read(path).map_err(|error| OpenError::Io { path: path.to_owned(), error })?;
         Self::from_backing(Backing::copy_of(&bytes)).map_err(|e| e.with_path(path))
     }
 
@@ -289,7 +296,7 @@ impl Intersector for Field {
 impl OpenError {
     fn with_path(self, path: &Path) -> OpenError {
         match self {
-            OpenError::Bytes(source) => OpenError::Format { path: path.to_owned(), source },
+            OpenError::Bytes(error) => OpenError::Format { path: path.to_owned(), error },
             other => other,
         }
     }

@@ -29,7 +29,7 @@ pub fn import_paths(paths: &[impl AsRef<Path>]) -> Result<Scene, ImportError> {
 /// zero-area triangles) is an error, [`ImportError::NoTriangles`], even when other inputs have
 /// triangles: it is almost certainly not what the caller meant to bake.
 pub fn import_path(builder: &mut SceneBuilder, path: &Path) -> Result<(), ImportError> {
-    let bytes = std::fs::read(path).map_err(|source| ImportError::Io { path: path.to_path_buf(), source })?;
+    let bytes = std::fs::read(path).map_err(|error| ImportError::Io { path: path.to_path_buf(), error })?;
     let format = detect_format(path, &bytes).ok_or_else(|| ImportError::UnknownFormat { path: path.to_path_buf() })?;
     let before = builder.triangle_count();
     let input = builder.begin_input(&path.to_string_lossy(), *blake3::hash(&bytes).as_bytes());

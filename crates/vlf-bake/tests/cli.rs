@@ -1,0 +1,1014 @@
+//! End-to-end tests of the `vlf-bake` command line: the real binary, run as a user would, in
+//! temporary directories, its outputs checked against the formats (`formats/rays.md`) and the
+//! `vlf_runtime` library.
+//!
+//! Every run goes through [`run`], which also asserts that the process was not killed by a signal
+//! and that nothing it printed contains "panicked". Bakes use small explicit parameters
+//! ([`SMALL`]) so each takes a few hundredths of a second.
+
+use serde_json::Value;
+use std::ffi::OsStr;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use vlf_runtime::{Field, Hit, Ray, hex};
+
+const BIN: &str = env!("CARGO_BIN_EXE_vlf-bake");
+const MESHES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/meshes/");
+
+/// Small explicit parameters: 33 directions × 16² tiles.
+const SMALL: [&str; 4] = ["--directions", "33", "--tiles", "16"];
+
+const BUNNY_TRIANGLES: u64 = 3674;
+const BOX_TRIANGLES: u64 = 12;
+
+/// The sections of a version 1.0 field (`formats/vlf.md` §5).
+const SECTION_NAMES: [&str; 15] = [
+    "SCENE",
+    "PARAMS",
+    "DIRECTIONS",
+    "ROTATIONS",
+    "LOOKUP",
+    "BEAMS",
+    "TILES",
+    "LEAF_BOUNDS",
+    "TRIANGLE_IDS",
+    "TRIANGLES",
+    "PROVENANCE",
+    "SOURCES",
+    "INPUTS",
+    "STRINGS",
+    "STATISTICS",
+];
+
+fn mesh(name: &str) -> PathBuf {
+    Path::new(MESHES).join(name)
+}
+
+fn tempdir() -> tempfile::TempDir {
+    tempfile::tempdir().expect("create a temporary directory")
+}
+
+/// What a finished `vlf-bake` process printed, and its exit code.
+#[derive(Debug)]
+struct Run {
+    what: String,
+    code: i32,
+    stdout: String,
+    stderr: String,
+}
+
+impl Run {
+    /// Asserts exit code 0 and returns the run.
+    fn ok(self) -> Run {
+        assert_eq!(self.code, 0, "`{}` failed:\nstdout: {}\nstderr: {}", self.what, self.stdout, self.stderr);
+        self
+    }
+
+    /// Asserts exit code `code` and returns the run.
+    fn fails_with(self, code: i32) -> Run {
+        assert_eq!(
+            self.code, code,
+            "`{}`: wrong exit code\nstdout: {}\nstderr: {}",
+            self.what, self.stdout, self.stderr
+        );
+        self
+    }
+
+    /// Asserts exit code 1 with exactly one line on standard error, starting with `error:`, and
+    /// returns that line.
+    fn one_error_line(&self) -> &str {
+        assert_eq!(
+            self.code, 1,
+            "`{}`: expected exit code 1\nstdout: {}\nstderr: {}",
+            self.what, self.stdout, self.stderr
+        );
+        let lines: Vec<&str> = self.stderr.lines().collect();
+        assert_eq!(lines.len(), 1, "`{}`: expected exactly one line on stderr, got:\n{}", self.what, self.stderr);
+        assert!(
+            lines[0].starts_with("error: "),
+            "`{}`: the error line does not start with `error:`: {}",
+            self.what,
+            lines[0]
+        );
+        lines[0]
+    }
+
+    /// Standard output as one JSON value.
+    fn json(&self) -> Value {
+        serde_json::from_str(&self.stdout)
+            .unwrap_or_else(|e| panic!("`{}`: stdout is not one JSON value ({e}):\n{}", self.what, self.stdout))
+    }
+}
+
+/// Runs a prepared command to completion.
+fn run(cmd: &mut Command) -> Run {
+    let what = std::iter::once("vlf-bake".to_string())
+        .chain(cmd.get_args().map(|a| a.to_string_lossy().into_owned()))
+        .collect::<Vec<_>>()
+        .join(" ");
+    let out = cmd.stdin(Stdio::null()).output().unwrap_or_else(|e| panic!("cannot run `{what}`: {e}"));
+    let stdout = String::from_utf8(out.stdout).expect("stdout is UTF-8");
+    let stderr = String::from_utf8(out.stderr).expect("stderr is UTF-8");
+    let Some(code) = out.status.code() else {
+        panic!("`{what}` was killed by a signal ({})\nstdout: {stdout}\nstderr: {stderr}", out.status)
+    };
+    assert!(
+        !stdout.contains("panicked") && !stderr.contains("panicked"),
+        "`{what}` panicked (exit code {code}):\nstdout: {stdout}\nstderr: {stderr}"
+    );
+    Run { what, code, stdout, stderr }
+}
+
+/// A `vlf-bake` command that does not depend on the caller's thread settings.
+fn command() -> Command {
+    let mut cmd = Command::new(BIN);
+    cmd.env_remove("RAYON_NUM_THREADS");
+    cmd
+}
+
+/// Runs `vlf-bake ARGS...`.
+fn vlf<S: AsRef<OsStr>>(args: &[S]) -> Run {
+    run(command().args(args))
+}
+
+/// Runs `vlf-bake bake INPUTS... -o OUTPUT --directions 33 --tiles 16 EXTRA...`.
+fn bake(inputs: &[&Path], output: &Path, extra: &[&str]) -> Run {
+    run(command().arg("bake").args(inputs).arg("-o").arg(output).args(SMALL).args(extra))
+}
+
+/// Bakes the bunny with [`SMALL`] parameters into `dir/name`.
+fn bake_bunny(dir: &Path, name: &str) -> PathBuf {
+    let field = dir.join(name);
+    let r = bake(&[&mesh("bunny.obj")], &field, &["--quiet"]).ok();
+    assert_eq!((r.stdout.as_str(), r.stderr.as_str()), ("", ""));
+    field
+}
+
+/// A path as a string argument (temporary directories and fixtures have UTF-8 paths).
+fn s(p: &Path) -> &str {
+    p.to_str().expect("UTF-8 path")
+}
+
+/// `dump --json` of a field.
+fn dump_json(field: &Path) -> Value {
+    vlf(&["dump", s(field), "--json"]).ok().json()
+}
+
+/// The `(offset, stored_length)` of a section, from `dump --json`.
+fn section_span(field: &Path, name: &str) -> (u64, u64) {
+    let info = dump_json(field);
+    let section = info["sections"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|e| e["name"] == name)
+        .unwrap_or_else(|| panic!("no section {name} in dump --json"));
+    (section["offset"].as_u64().unwrap(), section["stored_length"].as_u64().unwrap())
+}
+
+/// The names in a directory, sorted.
+fn names_in(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> =
+        std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    names.sort();
+    names
+}
+
+/// Asserts that no temporary file (`.NAME.XXXX.tmp`) was left in `dir`.
+fn assert_no_temp_files(dir: &Path) {
+    let names = names_in(dir);
+    assert!(
+        !names.iter().any(|n| n.starts_with('.') || n.ends_with(".tmp")),
+        "temporary files left in {}: {names:?}",
+        dir.display()
+    );
+}
+
+fn is_hex_hash(v: &Value) -> bool {
+    v.as_str().is_some_and(|s| s.len() == 64 && s.bytes().all(|b| b.is_ascii_digit() || (b'a'..=b'f').contains(&b)))
+}
+
+fn le_f32(b: &[u8], i: usize) -> f32 {
+    f32::from_le_bytes(b[4 * i..4 * i + 4].try_into().unwrap())
+}
+
+fn le_u32(b: &[u8], i: usize) -> u32 {
+    u32::from_le_bytes(b[4 * i..4 * i + 4].try_into().unwrap())
+}
+
+/// Reads a rays file by the byte layout of `formats/rays.md` (not through the `Ray` struct).
+fn read_rays(path: &Path) -> Vec<Ray> {
+    let bytes = std::fs::read(path).unwrap();
+    assert_eq!(bytes.len() % 32, 0, "{} is not a whole number of 32-byte rays", path.display());
+    bytes
+        .chunks_exact(32)
+        .map(|c| Ray {
+            org: [le_f32(c, 0), le_f32(c, 1), le_f32(c, 2)],
+            tmin: le_f32(c, 3),
+            dir: [le_f32(c, 4), le_f32(c, 5), le_f32(c, 6)],
+            tmax: le_f32(c, 7),
+        })
+        .collect()
+}
+
+/// Writes a rays file by the byte layout of `formats/rays.md`.
+fn write_rays(path: &Path, rays: &[Ray]) {
+    let mut bytes = Vec::with_capacity(rays.len() * 32);
+    for r in rays {
+        for x in [r.org[0], r.org[1], r.org[2], r.tmin, r.dir[0], r.dir[1], r.dir[2], r.tmax] {
+            bytes.extend_from_slice(&x.to_le_bytes());
+        }
+    }
+    std::fs::write(path, bytes).unwrap();
+}
+
+/// A hit record as its four little-endian words: `t` bits, `prim`, `u` bits, `v` bits.
+type Record = [u32; 4];
+
+/// Reads a hits file by the byte layout of `formats/rays.md`.
+fn read_hits(path: &Path) -> Vec<Record> {
+    let bytes = std::fs::read(path).unwrap();
+    assert_eq!(bytes.len() % 16, 0, "{} is not a whole number of 16-byte hits", path.display());
+    bytes.chunks_exact(16).map(|c| [le_u32(c, 0), le_u32(c, 1), le_u32(c, 2), le_u32(c, 3)]).collect()
+}
+
+fn record(hit: Hit) -> Record {
+    [hit.t.to_bits(), hit.prim, hit.u.to_bits(), hit.v.to_bits()]
+}
+
+const MISS: Record = [0x7f80_0000, u32::MAX, 0, 0];
+
+/// Parses the number in `text` that follows `before` and ends at `after`.
+fn number_between(text: &str, before: &str, after: &str) -> f64 {
+    let start = text.find(before).unwrap_or_else(|| panic!("no `{before}` in {text}")) + before.len();
+    let len = text[start..].find(after).unwrap_or_else(|| panic!("no `{after}` after `{before}` in {text}"));
+    text[start..start + len].trim().parse().unwrap_or_else(|e| panic!("`{}` is not a number: {e}", &text[start..]))
+}
+
+// ---------------------------------------------------------------------------------------------
+// 1. bake
+
+#[test]
+fn bake_prints_a_summary_with_counts_size_time_and_hashes() {
+    let dir = tempdir();
+    let field_path = dir.path().join("bunny.vlf");
+    let r = bake(&[&mesh("bunny.obj")], &field_path, &[]).ok();
+    assert_eq!(r.stderr, "", "explicit parameters: no choice note, and no progress bar off a terminal");
+
+    let field = Field::open(&field_path).unwrap();
+    let bytes = std::fs::metadata(&field_path).unwrap().len();
+    let out = &r.stdout;
+    assert!(out.contains(&format!("{BUNNY_TRIANGLES} triangles")), "{out}");
+    assert!(out.contains("33 directions"), "{out}");
+    assert!(out.contains("16² tiles"), "{out}");
+    assert!(out.contains(&format!("({bytes} bytes)")), "{out}");
+    let seconds = number_between(out, "bytes) in ", " s");
+    assert!((0.0..60.0).contains(&seconds), "{out}");
+    assert!(out.contains(&format!("content hash {}", hex(&field.content_hash()))), "{out}");
+    assert!(out.contains(&format!("input hash   {}", hex(&field.input_hash()))), "{out}");
+}
+
+#[test]
+fn bake_json_prints_one_object_with_the_summary() {
+    let dir = tempdir();
+    let field_path = dir.path().join("bunny.vlf");
+    let r = bake(&[&mesh("bunny.obj")], &field_path, &["--json"]).ok();
+    assert_eq!(r.stderr, "");
+    assert_eq!(r.stdout.lines().count(), 1, "one line of JSON: {}", r.stdout);
+    let j = r.json();
+    assert!(j.is_object(), "{j}");
+    for key in ["triangles", "directions", "tile_resolution", "bytes", "seconds", "content_hash", "input_hash"] {
+        assert!(j.get(key).is_some(), "--json lacks `{key}`: {j}");
+    }
+    let field = Field::open(&field_path).unwrap();
+    assert_eq!(j["triangles"], BUNNY_TRIANGLES);
+    assert_eq!(j["directions"], 33);
+    assert_eq!(j["tile_resolution"], 16);
+    assert_eq!(j["bytes"], std::fs::metadata(&field_path).unwrap().len());
+    assert_eq!(j["bytes"], field.len_bytes());
+    assert!(j["seconds"].as_f64().is_some_and(|t| (0.0..60.0).contains(&t)), "{j}");
+    assert_eq!(j["content_hash"], hex(&field.content_hash()));
+    assert_eq!(j["input_hash"], hex(&field.input_hash()));
+    assert!(is_hex_hash(&j["content_hash"]) && is_hex_hash(&j["input_hash"]), "{j}");
+}
+
+#[test]
+fn bake_quiet_prints_nothing_on_success() {
+    let dir = tempdir();
+    // Explicit parameters.
+    let explicit = dir.path().join("explicit.vlf");
+    let r = bake(&[&mesh("bunny.obj")], &explicit, &["--quiet"]).ok();
+    assert_eq!((r.stdout.as_str(), r.stderr.as_str()), ("", ""));
+    assert_eq!(Field::open(&explicit).unwrap().triangle_count() as u64, BUNNY_TRIANGLES);
+
+    // Automatic parameters: without --quiet the choice is explained on stderr; with it, nothing.
+    let auto = dir.path().join("auto.vlf");
+    let loud = vlf(&["bake", s(&mesh("Box.gltf")), "-o", s(&auto)]).ok();
+    assert!(loud.stderr.contains("chose"), "automatic parameters are explained: {loud:?}");
+    let r = vlf(&["bake", s(&mesh("Box.gltf")), "-o", s(&auto), "-q"]).ok();
+    assert_eq!((r.stdout.as_str(), r.stderr.as_str()), ("", ""));
+    assert_eq!(Field::open(&auto).unwrap().triangle_count() as u64, BOX_TRIANGLES);
+}
+
+#[test]
+fn bake_of_several_inputs_makes_one_field_with_all_their_triangles() {
+    let dir = tempdir();
+    let field_path = dir.path().join("both.vlf");
+    let j = bake(&[&mesh("bunny.obj"), &mesh("Box.gltf")], &field_path, &["--json"]).ok().json();
+    assert_eq!(j["triangles"], BUNNY_TRIANGLES + BOX_TRIANGLES);
+
+    let field = Field::open(&field_path).unwrap();
+    assert_eq!(field.triangle_count() as u64, BUNNY_TRIANGLES + BOX_TRIANGLES);
+    let inputs: Vec<(String, u64)> = dump_json(&field_path)["inputs"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|i| (i["name"].as_str().unwrap().to_string(), i["triangles"].as_u64().unwrap()))
+        .collect();
+    assert_eq!(inputs, [("bunny.obj".to_string(), BUNNY_TRIANGLES), ("Box.gltf".to_string(), BOX_TRIANGLES)]);
+    let mut per_input = std::collections::BTreeMap::<&str, u64>::new();
+    for id in 0..field.triangle_count() {
+        *per_input.entry(field.provenance(id).expect("every triangle has a provenance").input).or_default() += 1;
+    }
+    assert_eq!(per_input, [("Box.gltf", BOX_TRIANGLES), ("bunny.obj", BUNNY_TRIANGLES)].into());
+}
+
+// ---------------------------------------------------------------------------------------------
+// 2. dump
+
+#[test]
+fn dump_json_has_the_documented_keys_and_agrees_with_the_library() {
+    let dir = tempdir();
+    let field_path = bake_bunny(dir.path(), "bunny.vlf");
+    let r = vlf(&["dump", s(&field_path), "--json"]).ok();
+    assert_eq!(r.stderr, "");
+    let j = r.json();
+    for key in [
+        "format_version",
+        "content_hash",
+        "input_hash",
+        "triangle_count",
+        "direction_count",
+        "tile_resolution",
+        "file_bytes",
+        "sections",
+        "statistics",
+        "worst_direction_angle_deg",
+    ] {
+        assert!(j.get(key).is_some(), "dump --json lacks `{key}`: {j}");
+    }
+    assert!(j.get("verify").is_none(), "no verify object without --verify");
+
+    let field = Field::open(&field_path).unwrap();
+    assert_eq!(j["format_version"], "1.0");
+    assert_eq!(j["content_hash"], hex(&field.content_hash()));
+    assert_eq!(j["input_hash"], hex(&field.input_hash()));
+    assert_eq!(j["triangle_count"], field.triangle_count());
+    assert_eq!(j["direction_count"], field.direction_count());
+    assert_eq!(j["tile_resolution"], field.tile_resolution());
+    assert_eq!(j["file_bytes"], field.len_bytes());
+    assert_eq!(j["file_bytes"], std::fs::metadata(&field_path).unwrap().len());
+    assert_eq!((field.direction_count(), field.tile_resolution()), (33, 16));
+
+    let sections = j["sections"].as_array().expect("sections is an array");
+    assert_eq!(sections.len(), 15, "{j}");
+    let file_bytes = field.len_bytes();
+    for e in sections {
+        for key in ["name", "offset", "stored_length", "raw_hash"] {
+            assert!(e.get(key).is_some(), "section lacks `{key}`: {e}");
+        }
+        let (offset, len) = (e["offset"].as_u64().unwrap(), e["stored_length"].as_u64().unwrap());
+        assert!(offset + len <= file_bytes, "section outside the file: {e}");
+        assert!(is_hex_hash(&e["raw_hash"]), "{e}");
+    }
+    let mut names: Vec<&str> = sections.iter().map(|e| e["name"].as_str().unwrap()).collect();
+    names.sort_unstable();
+    let mut expected = SECTION_NAMES;
+    expected.sort_unstable();
+    assert_eq!(names, expected);
+
+    assert!(j["statistics"].is_object(), "{j}");
+    assert_eq!(j["statistics"]["tiles"], 33 * 16 * 16);
+    let angle = j["worst_direction_angle_deg"].as_f64().expect("a number");
+    assert!(angle > 0.0 && angle < 90.0, "{angle}");
+}
+
+#[test]
+fn dump_text_describes_the_field_and_names_every_section() {
+    let dir = tempdir();
+    let field_path = bake_bunny(dir.path(), "bunny.vlf");
+    let r = vlf(&["dump", s(&field_path)]).ok();
+    assert_eq!(r.stderr, "");
+    let field = Field::open(&field_path).unwrap();
+    assert!(r.stdout.starts_with("VLF field, format 1.0"), "{}", r.stdout);
+    assert!(r.stdout.contains(&hex(&field.content_hash())), "{}", r.stdout);
+    assert!(r.stdout.contains(&format!("{BUNNY_TRIANGLES}")), "{}", r.stdout);
+    for name in SECTION_NAMES {
+        assert!(r.stdout.contains(name), "dump does not mention section {name}:\n{}", r.stdout);
+    }
+    assert!(!r.stdout.contains("verify"), "no verification without --verify");
+}
+
+#[test]
+fn dump_verify_reports_ok_on_a_sound_field() {
+    let dir = tempdir();
+    let field_path = bake_bunny(dir.path(), "bunny.vlf");
+    let r = vlf(&["dump", s(&field_path), "--verify"]).ok();
+    assert_eq!(r.stderr, "");
+    assert!(r.stdout.contains("verify: OK"), "{}", r.stdout);
+
+    let j = vlf(&["dump", s(&field_path), "--verify", "--json"]).ok().json();
+    assert_eq!(j["verify"]["ok"], true, "{j}");
+    assert_eq!(j["verify"]["triangle_ids"], j["statistics"]["triangle_ids"], "{j}");
+}
+
+// ---------------------------------------------------------------------------------------------
+// 3. corruption
+
+#[test]
+fn a_flipped_byte_in_triangle_ids_fails_verify_naming_the_section() {
+    let dir = tempdir();
+    let good = bake_bunny(dir.path(), "good.vlf");
+    let (offset, len) = section_span(&good, "TRIANGLE_IDS");
+    assert!(len > 0);
+    let mut bytes = std::fs::read(&good).unwrap();
+    bytes[(offset + len / 2) as usize] ^= 0x01;
+    let bad = dir.path().join("bad.vlf");
+    std::fs::write(&bad, &bytes).unwrap();
+
+    // Opening checks only the header and table (O(1)), so a plain dump still describes it...
+    vlf(&["dump", s(&bad)]).ok();
+    // ...and --verify finds the damaged section.
+    for args in [vec!["dump", s(&bad), "--verify"], vec!["dump", s(&bad), "--verify", "--json"]] {
+        let r = vlf(&args);
+        let line = r.one_error_line();
+        assert!(line.contains("TRIANGLE_IDS"), "the error does not name the section: {line}");
+        assert!(line.contains("hash mismatch") || line.contains("corrupt"), "{line}");
+        assert!(!r.stdout.contains("verify: OK"), "{}", r.stdout);
+    }
+}
+
+#[test]
+fn a_flipped_byte_in_the_header_is_a_content_hash_mismatch_at_open() {
+    let dir = tempdir();
+    let good = bake_bunny(dir.path(), "good.vlf");
+    let mut bytes = std::fs::read(&good).unwrap();
+    bytes[90] ^= 0x10; // inside the header's input hash (bytes 80..112)
+    let bad = dir.path().join("bad.vlf");
+    std::fs::write(&bad, &bytes).unwrap();
+    for args in [vec!["dump", s(&bad)], vec!["dump", s(&bad), "--json"], vec!["dump", s(&bad), "--verify"]] {
+        let r = vlf(&args);
+        let line = r.one_error_line();
+        assert!(line.contains("content hash mismatch"), "{line}");
+        assert!(line.contains("bad.vlf"), "the error does not name the file: {line}");
+        assert_eq!(r.stdout, "");
+    }
+}
+
+#[test]
+fn a_truncated_field_is_refused() {
+    let dir = tempdir();
+    let good = bake_bunny(dir.path(), "good.vlf");
+    let bytes = std::fs::read(&good).unwrap();
+    for (name, len) in [("cut_end.vlf", bytes.len() - 100), ("cut_half.vlf", bytes.len() / 2), ("cut_header.vlf", 50)] {
+        let bad = dir.path().join(name);
+        std::fs::write(&bad, &bytes[..len]).unwrap();
+        let rays = dir.path().join("rays.bin");
+        for args in [vec!["dump", s(&bad)], vec!["dump", s(&bad), "--verify"], vec!["rays", s(&bad), "-o", s(&rays)]] {
+            let r = vlf(&args);
+            let line = r.one_error_line();
+            assert!(line.contains("truncated"), "{line}");
+            assert!(line.contains(name), "{line}");
+        }
+    }
+}
+
+#[test]
+fn a_foreign_file_is_not_a_vlf_field() {
+    let dir = tempdir();
+    let hits = dir.path().join("hits.bin");
+    for foreign in [mesh("bunny.obj"), mesh("Box.gltf"), mesh("bunny_scene.glb")] {
+        for args in [
+            vec!["dump", s(&foreign)],
+            vec!["dump", s(&foreign), "--verify"],
+            vec!["trace", s(&foreign), "--rays", s(&foreign), "--out", s(&hits)],
+        ] {
+            let r = vlf(&args);
+            let line = r.one_error_line();
+            assert!(line.contains("not a VLF field"), "{line}");
+        }
+    }
+    assert!(!hits.exists(), "no hits file for a failed trace");
+}
+
+#[test]
+fn error_messages_do_not_repeat_their_cause() {
+    let dir = tempdir();
+    let good = bake_bunny(dir.path(), "good.vlf");
+    let mut bytes = std::fs::read(&good).unwrap();
+    bytes[90] ^= 0x10;
+    let bad = dir.path().join("bad.vlf");
+    std::fs::write(&bad, &bytes).unwrap();
+    let missing = dir.path().join("missing.vlf");
+    let cases = [
+        (vlf(&["dump", s(&bad)]), "content hash mismatch"),
+        (vlf(&["dump", s(&mesh("bunny.obj"))]), "not a VLF field"),
+        (vlf(&["dump", s(&missing)]), "(os error 2)"),
+        (bake(&[&dir.path().join("missing.obj")], &dir.path().join("x.vlf"), &[]), "(os error 2)"),
+        (bake(&[&mesh("Box.gltf")], &dir.path().join("no/such/dir/x.vlf"), &[]), "(os error 2)"),
+    ];
+    for (r, phrase) in cases {
+        let line = r.one_error_line();
+        assert_eq!(line.matches(phrase).count(), 1, "`{}` repeats `{phrase}`: {line}", r.what);
+    }
+}
+
+#[test]
+fn dump_of_a_field_with_corrupt_statistics_reports_instead_of_panicking() {
+    let dir = tempdir();
+    let good = bake_bunny(dir.path(), "good.vlf");
+    let (offset, _) = section_span(&good, "STATISTICS");
+    let offset = offset as usize;
+    // StatisticsRecord: tile_count u64 @0, empty_tiles u64 @8, ..., depth_histogram [u64; 32] @48.
+    let mut histogram = std::fs::read(&good).unwrap();
+    histogram[offset + 48 + 31 * 8..offset + 48 + 32 * 8].copy_from_slice(&u64::MAX.to_le_bytes());
+    let mut empty = std::fs::read(&good).unwrap();
+    empty[offset + 8..offset + 16].copy_from_slice(&u64::MAX.to_le_bytes());
+    for (name, bytes) in [("histogram.vlf", histogram), ("empty.vlf", empty)] {
+        let bad = dir.path().join(name);
+        std::fs::write(&bad, bytes).unwrap();
+        // `run` fails the test if the process panics. Open does not hash STATISTICS, so a plain
+        // dump may describe the nonsense, but it must not crash; --verify must name the section.
+        let plain = vlf(&["dump", s(&bad)]);
+        assert!(plain.code == 0 || plain.code == 1, "{plain:?}");
+        let r = vlf(&["dump", s(&bad), "--verify"]);
+        let line = r.one_error_line();
+        assert!(line.contains("STATISTICS"), "{line}");
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// 4. determinism and atomic output
+
+#[test]
+fn bakes_are_byte_identical_for_any_thread_count() {
+    let dir = tempdir();
+    let inputs = [mesh("bunny.obj"), mesh("Box.gltf")];
+    let inputs: Vec<&Path> = inputs.iter().map(PathBuf::as_path).collect();
+    let one = dir.path().join("one.vlf");
+    let two = dir.path().join("two.vlf");
+    let env = dir.path().join("env.vlf");
+    bake(&inputs, &one, &["--threads", "1", "-q"]).ok();
+    bake(&inputs, &two, &["--threads", "2", "-q"]).ok();
+    run(command().env("RAYON_NUM_THREADS", "3").arg("bake").args(&inputs).arg("-o").arg(&env).args(SMALL).arg("-q"))
+        .ok();
+    let reference = std::fs::read(&one).unwrap();
+    assert!(std::fs::read(&two).unwrap() == reference, "--threads 1 and --threads 2 differ");
+    assert!(std::fs::read(&env).unwrap() == reference, "--threads 1 and RAYON_NUM_THREADS=3 differ");
+}
+
+#[test]
+fn baking_over_an_existing_field_replaces_it_atomically() {
+    let dir = tempdir();
+    let out = bake_bunny(dir.path(), "scene.vlf");
+    let old = Field::open(&out).unwrap();
+    let old_hash = old.content_hash();
+
+    bake(&[&mesh("Box.gltf")], &out, &["-q"]).ok();
+    let new = Field::open(&out).unwrap();
+    assert_eq!(new.triangle_count() as u64, BOX_TRIANGLES);
+    assert_ne!(new.content_hash(), old_hash);
+    // The rename left the old mapping on the old file: it still reads as the bunny (an in-place
+    // rewrite would have changed or truncated the mapped bytes under it).
+    assert_eq!(old.triangle_count() as u64, BUNNY_TRIANGLES);
+    assert_eq!(old.content_hash(), old_hash);
+    assert!(old.closest_hit(&Ray::new([0.0, 4.8, 20.0], [0.0, 0.0, -1.0])).is_some());
+    assert_eq!(names_in(dir.path()), ["scene.vlf"]);
+    assert_no_temp_files(dir.path());
+}
+
+#[test]
+fn a_failed_bake_leaves_the_previous_field_and_no_temporary_files() {
+    let dir = tempdir();
+    let out = bake_bunny(dir.path(), "scene.vlf");
+    let before = std::fs::read(&out).unwrap();
+    let missing = dir.path().join("missing.obj");
+    let failures = [
+        (bake(&[&missing], &out, &[]), "missing.obj"),
+        (bake(&[&mesh("bad/nan_vertex.obj")], &out, &[]), "nan_vertex.obj"),
+        (bake(&[&mesh("Box.gltf"), &mesh("bad/nan_vertex.obj")], &out, &[]), "non-finite"),
+        (bake(&[&mesh("bad/empty.obj")], &out, &[]), "empty.obj"),
+        (bake(&[&mesh("bunny.obj")], &out, &["--max-bytes", "1KiB"]), "budget"),
+    ];
+    for (r, phrase) in failures {
+        let line = r.one_error_line();
+        assert!(line.contains(phrase), "`{}`: {line}", r.what);
+        assert!(std::fs::read(&out).unwrap() == before, "`{}` changed the previous field", r.what);
+        assert_eq!(names_in(dir.path()), ["scene.vlf"], "after `{}`", r.what);
+    }
+    assert_no_temp_files(dir.path());
+    vlf(&["dump", s(&out), "--verify"]).ok();
+}
+
+#[cfg(unix)]
+#[test]
+fn output_files_get_the_same_permissions_as_any_new_file() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = tempdir();
+    let mode = |p: &Path| std::fs::metadata(p).unwrap().permissions().mode() & 0o777;
+    let reference = dir.path().join("reference");
+    std::fs::write(&reference, b"").unwrap(); // honours the umask, as cp, cargo and compilers do
+    let expected = mode(&reference);
+
+    let field = bake_bunny(dir.path(), "bunny.vlf");
+    let rays = dir.path().join("rays.bin");
+    let hits = dir.path().join("hits.bin");
+    let obj = dir.path().join("random.obj");
+    vlf(&["rays", s(&field), "--width", "8", "--height", "8", "-o", s(&rays)]).ok();
+    vlf(&["trace", s(&field), "--rays", s(&rays), "--out", s(&hits)]).ok();
+    vlf(&["gen", "random", "--count", "10", "-o", s(&obj)]).ok();
+    for p in [&field, &rays, &hits, &obj] {
+        assert_eq!(mode(p), expected, "{} has mode {:o}, a new file gets {expected:o}", p.display(), mode(p));
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// 5. rays and trace
+
+/// Bakes the bunny and writes 64×48 primary rays from outside; returns (dir, field, rays).
+fn bunny_and_rays() -> (tempfile::TempDir, PathBuf, PathBuf) {
+    let dir = tempdir();
+    let field = bake_bunny(dir.path(), "bunny.vlf");
+    let rays = dir.path().join("rays.bin");
+    let r = vlf(&["rays", s(&field), "--view", "outside", "--width", "64", "--height", "48", "-o", s(&rays)]).ok();
+    assert_eq!((r.stdout.as_str(), r.stderr.as_str()), ("", ""));
+    assert_eq!(std::fs::metadata(&rays).unwrap().len(), 64 * 48 * 32);
+    (dir, field, rays)
+}
+
+#[test]
+fn trace_closest_hits_match_the_library_bit_for_bit() {
+    let (dir, field_path, rays_path) = bunny_and_rays();
+    let hits_path = dir.path().join("hits.bin");
+    let r = vlf(&["trace", s(&field_path), "--rays", s(&rays_path), "--out", s(&hits_path), "--json"]).ok();
+    assert_eq!(r.stderr, "");
+    let j = r.json();
+    for key in ["rays", "hits", "seconds", "mrays_per_s"] {
+        assert!(j.get(key).is_some(), "trace --json lacks `{key}`: {j}");
+    }
+    assert_eq!(j["rays"], 3072);
+    assert_eq!(j["invalid"], 0);
+    assert_eq!(j["any_hit"], false);
+    assert!(j["seconds"].as_f64().is_some_and(|t| t >= 0.0) && j["mrays_per_s"].as_f64().is_some_and(|m| m > 0.0));
+
+    let field = Field::open(&field_path).unwrap();
+    let rays = read_rays(&rays_path);
+    let hits = read_hits(&hits_path);
+    assert_eq!((rays.len(), hits.len()), (3072, 3072));
+    let mut hit_count = 0;
+    for (i, (ray, got)) in rays.iter().zip(&hits).enumerate() {
+        assert!(ray.is_valid(), "ray {i} from `rays` is invalid: {ray:?}");
+        let expected = field.closest_hit(ray);
+        hit_count += expected.is_some() as u64;
+        assert_eq!(*got, record(Hit::record(expected)), "ray {i}: {ray:?}");
+    }
+    assert_eq!(j["hits"], hit_count);
+    assert!(hit_count > 100 && hit_count < 3072, "the frame should show both the bunny and background: {hit_count}");
+
+    // One worker thread: the same records.
+    let hits1 = dir.path().join("hits1.bin");
+    let j1 = vlf(&["trace", s(&field_path), "--rays", s(&rays_path), "--out", s(&hits1), "--json", "--threads", "1"])
+        .ok()
+        .json();
+    assert_eq!(j1["threads"], 1);
+    assert_eq!(j1["hits"], hit_count);
+    assert!(std::fs::read(&hits1).unwrap() == std::fs::read(&hits_path).unwrap(), "--threads 1 differs");
+
+    // Text output.
+    let text = vlf(&["trace", s(&field_path), "--rays", s(&rays_path), "--out", s(&hits1)]).ok();
+    assert!(text.stdout.starts_with(&format!("traced 3072 rays ({hit_count} hits, 0 invalid)")), "{}", text.stdout);
+}
+
+#[test]
+fn trace_any_hit_agrees_with_the_library() {
+    let (dir, field_path, rays_path) = bunny_and_rays();
+    let field = Field::open(&field_path).unwrap();
+    let rays = read_rays(&rays_path);
+    for threads in [None, Some("1")] {
+        let hits_path = dir.path().join("any.bin");
+        let mut args =
+            vec!["trace", s(&field_path), "--rays", s(&rays_path), "--out", s(&hits_path), "--any-hit", "--json"];
+        if let Some(t) = threads {
+            args.extend(["--threads", t]);
+        }
+        let j = vlf(&args).ok().json();
+        assert_eq!(j["rays"], 3072);
+        assert_eq!(j["any_hit"], true);
+        let hits = read_hits(&hits_path);
+        assert_eq!(hits.len(), rays.len());
+        let mut hit_count = 0;
+        for (i, (ray, got)) in rays.iter().zip(&hits).enumerate() {
+            let expected = field.any_hit(ray);
+            assert_eq!(got[1] != u32::MAX, expected, "ray {i} (threads {threads:?}): record {got:?}");
+            if expected {
+                hit_count += 1;
+                // Some hit in the interval, on an existing triangle, with valid barycentrics.
+                let (t, u, v) = (f32::from_bits(got[0]), f32::from_bits(got[2]), f32::from_bits(got[3]));
+                assert!(got[1] < field.triangle_count(), "ray {i}: {got:?}");
+                assert!(t >= ray.tmin && t <= ray.tmax, "ray {i}: t = {t}");
+                assert!(u >= 0.0 && v >= 0.0 && u + v <= 1.0 + 1e-6, "ray {i}: u = {u}, v = {v}");
+            } else {
+                assert_eq!(*got, MISS, "ray {i}");
+            }
+        }
+        assert_eq!(j["hits"], hit_count);
+        assert!(hit_count > 0);
+    }
+}
+
+#[test]
+fn trace_refuses_a_rays_file_that_is_not_whole_records() {
+    let (dir, field_path, rays_path) = bunny_and_rays();
+    let rays = std::fs::read(&rays_path).unwrap();
+    let odd = dir.path().join("odd.bin");
+    std::fs::write(&odd, &rays[..100]).unwrap();
+    let hits = dir.path().join("hits.bin");
+    let r = vlf(&["trace", s(&field_path), "--rays", s(&odd), "--out", s(&hits)]);
+    let line = r.one_error_line();
+    assert!(line.contains("odd.bin") && line.contains("100 bytes"), "{line}");
+    assert!(line.contains("not a multiple of the 32-byte"), "{line}");
+    assert!(!hits.exists(), "no hits file after a refused rays file");
+
+    // An empty rays file is zero whole records: an empty hits file.
+    let empty = dir.path().join("empty.bin");
+    std::fs::write(&empty, b"").unwrap();
+    let j = vlf(&["trace", s(&field_path), "--rays", s(&empty), "--out", s(&hits), "--json"]).ok().json();
+    assert_eq!(j["rays"], 0);
+    assert_eq!(std::fs::metadata(&hits).unwrap().len(), 0);
+}
+
+#[test]
+fn invalid_rays_are_written_as_misses_and_counted() {
+    let dir = tempdir();
+    let field_path = bake_bunny(dir.path(), "bunny.vlf");
+    let field = Field::open(&field_path).unwrap();
+    let (c, radius) = field.bounding_sphere();
+    let centre = [c[0] as f32, c[1] as f32, c[2] as f32];
+    let from_front = [centre[0], centre[1], centre[2] + 3.0 * radius as f32];
+    let valid = Ray::new(from_front, [0.0, 0.0, -1.0]);
+    let rays = [
+        valid,
+        Ray::new([f32::NAN, 0.0, 0.0], [0.0, 0.0, -1.0]),
+        Ray::new(from_front, [0.0, 0.0, 0.0]),
+        Ray::with_interval(from_front, [0.0, 0.0, -1.0], 5.0, 1.0),
+        Ray::with_interval(from_front, [0.0, 0.0, -1.0], 0.0, f32::NAN),
+    ];
+    let expected_invalid = rays.iter().filter(|r| !r.is_valid()).count();
+    assert_eq!(expected_invalid, 4);
+    let rays_path = dir.path().join("hand.bin");
+    write_rays(&rays_path, &rays);
+    // The three invalid kinds named by the brief, as their own file.
+    let three_path = dir.path().join("three.bin");
+    write_rays(&three_path, &rays[..4]);
+
+    for any_hit in [false, true] {
+        let hits_path = dir.path().join("hits.bin");
+        let mut args = vec!["trace", s(&field_path), "--rays", s(&three_path), "--out", s(&hits_path), "--json"];
+        if any_hit {
+            args.push("--any-hit");
+        }
+        let j = vlf(&args).ok().json();
+        assert_eq!(j["rays"], 4);
+        assert_eq!(j["invalid"], 3, "{j}");
+
+        args[3] = s(&rays_path);
+        let j = vlf(&args).ok().json();
+        assert_eq!(j["invalid"], 4, "a NaN bound is invalid too: {j}");
+        let hits = read_hits(&hits_path);
+        assert_eq!(hits.len(), rays.len());
+        for (i, got) in hits.iter().enumerate().skip(1) {
+            assert_eq!(*got, MISS, "invalid ray {i} ({:?}), any_hit {any_hit}", rays[i]);
+        }
+        if any_hit {
+            assert_eq!(hits[0][1] != u32::MAX, field.any_hit(&valid));
+        } else {
+            assert_eq!(hits[0], record(Hit::record(field.closest_hit(&valid))));
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// 6. errors and help
+
+#[test]
+fn a_missing_input_is_one_error_line_naming_the_file() {
+    let dir = tempdir();
+    let missing = dir.path().join("no_such_mesh.obj");
+    let out = dir.path().join("out.vlf");
+    let r = bake(&[&missing], &out, &[]);
+    let line = r.one_error_line();
+    assert!(line.contains("no_such_mesh.obj"), "{line}");
+    assert_eq!(r.stdout, "");
+    assert!(!out.exists());
+
+    let r = vlf(&["dump", s(&dir.path().join("no_such_field.vlf"))]);
+    assert!(r.one_error_line().contains("no_such_field.vlf"));
+    let r = vlf(&["rays", s(&dir.path().join("no_such_field.vlf")), "-o", s(&dir.path().join("r.bin"))]);
+    assert!(r.one_error_line().contains("no_such_field.vlf"));
+    let field = bake_bunny(dir.path(), "bunny.vlf");
+    let r = vlf(&["trace", s(&field), "--rays", s(&dir.path().join("no_rays.bin")), "--out", s(&out)]);
+    assert!(r.one_error_line().contains("no_rays.bin"));
+}
+
+#[test]
+fn invalid_flags_are_refused_with_a_clear_message() {
+    let dir = tempdir();
+    let out = dir.path().join("out.vlf");
+    let bunny = mesh("bunny.obj");
+    let bake_with = |flags: &[&str]| run(command().arg("bake").arg(&bunny).arg("-o").arg(&out).args(flags));
+    // Validation errors: exit 1, one line naming the flag and value.
+    for (flags, phrase) in [
+        (&["--tiles", "0", "--directions", "33"][..], "--tiles 0"),
+        (&["--directions", "0", "--tiles", "16"], "--directions 0"),
+        (&["--max-depth", "99", "--directions", "33", "--tiles", "16"], "--max-depth 99"),
+        (&["--threads", "0", "--directions", "33", "--tiles", "16"], "--threads"),
+    ] {
+        let r = bake_with(flags);
+        let line = r.one_error_line();
+        assert!(line.contains(phrase), "`{}`: {line}", r.what);
+        assert!(!out.exists(), "`{}` wrote a field", r.what);
+    }
+    // Command-line errors: exit 2, clap's message and usage hint.
+    let clap_errors = [
+        (bake_with(&["--max-bytes", "banana"]), "banana"),
+        (bake_with(&["--tiles", "many"]), "many"),
+        (bake_with(&["--no-such-flag"]), "--no-such-flag"),
+        (vlf(&["frobnicate"]), "frobnicate"),
+        (vlf(&["bake", s(&bunny)]), "--output"),
+        (vlf(&["gen", "spheres", "-o", s(&out)]), "spheres"),
+        (vlf(&[] as &[&str]), "Usage"),
+    ];
+    for (r, phrase) in clap_errors {
+        let r = r.fails_with(2);
+        assert!(r.stderr.starts_with("error:") || r.stderr.starts_with("Bake triangle meshes"), "{:?}", r);
+        assert!(r.stderr.contains(phrase), "`{}` does not mention `{phrase}`: {}", r.what, r.stderr);
+        assert!(!out.exists());
+    }
+    // `rays` validates its size.
+    let field = bake_bunny(dir.path(), "bunny.vlf");
+    let r = vlf(&["rays", s(&field), "--width", "0", "-o", s(&dir.path().join("r.bin"))]);
+    assert!(r.one_error_line().contains("--width"));
+}
+
+#[test]
+fn explicit_parameters_over_the_budget_are_refused() {
+    let dir = tempdir();
+    let out = dir.path().join("out.vlf");
+    let r = run(command().arg("bake").arg(mesh("bunny.obj")).arg("-o").arg(&out).args([
+        "--max-bytes",
+        "1KiB",
+        "--directions",
+        "2049",
+        "--tiles",
+        "128",
+    ]));
+    let line = r.one_error_line();
+    assert!(line.contains("budget"), "{line}");
+    assert!(line.contains("--max-bytes"), "{line}");
+    assert!(!out.exists());
+    assert_no_temp_files(dir.path());
+}
+
+#[test]
+fn every_subcommand_has_help() {
+    for args in [
+        &["--help"][..],
+        &["help"],
+        &["bake", "--help"],
+        &["dump", "--help"],
+        &["trace", "--help"],
+        &["rays", "--help"],
+        &["gen", "--help"],
+        &["demo", "--help"],
+        &["help", "bake"],
+        &["bake", "-h"],
+    ] {
+        let r = vlf(args).ok();
+        assert!(r.stdout.contains("Usage:"), "`{}` prints no usage:\n{}", r.what, r.stdout);
+        assert!(r.stdout.contains("--help"), "`{}`:\n{}", r.what, r.stdout);
+    }
+    let r = vlf(&["--help"]).ok();
+    for sub in ["bake", "dump", "trace", "rays", "gen", "demo"] {
+        assert!(r.stdout.contains(sub), "top-level help does not list `{sub}`:\n{}", r.stdout);
+    }
+    let v = vlf(&["--version"]).ok();
+    assert!(v.stdout.starts_with("vlf-bake "), "{}", v.stdout);
+}
+
+// ---------------------------------------------------------------------------------------------
+// 7. gen
+
+#[test]
+fn gen_random_is_deterministic_and_bakes() {
+    let dir = tempdir();
+    let a = dir.path().join("a.obj");
+    let b = dir.path().join("b.obj");
+    let c = dir.path().join("c.obj");
+    for (path, seed) in [(&a, "3"), (&b, "3"), (&c, "4")] {
+        let r = vlf(&["gen", "random", "--count", "500", "--seed", seed, "-o", s(path)]).ok();
+        assert_eq!((r.stdout.as_str(), r.stderr.as_str()), ("", ""));
+    }
+    let bytes = std::fs::read(&a).unwrap();
+    assert!(std::fs::read(&b).unwrap() == bytes, "same seed, different files");
+    assert!(std::fs::read(&c).unwrap() != bytes, "different seeds, same file");
+    let field = dir.path().join("random.vlf");
+    let j = bake(&[&a], &field, &["--json"]).ok().json();
+    assert_eq!(j["triangles"].as_u64().unwrap() + j["dropped_degenerate"].as_u64().unwrap(), 500, "{j}");
+    assert!(j["triangles"].as_u64().unwrap() > 490, "{j}");
+    vlf(&["dump", s(&field), "--verify"]).ok();
+    assert_no_temp_files(dir.path());
+}
+
+#[test]
+fn gen_grid_and_slivers_bake() {
+    let dir = tempdir();
+    for (kind, count, triangles) in [("grid", "8", 8 * 8 * 2 * 4), ("slivers", "200", 200)] {
+        let obj = dir.path().join(format!("{kind}.obj"));
+        vlf(&["gen", kind, "--count", count, "--seed", "7", "-o", s(&obj)]).ok();
+        let field = dir.path().join(format!("{kind}.vlf"));
+        let j = bake(&[&obj], &field, &["--json"]).ok().json();
+        let baked = j["triangles"].as_u64().unwrap();
+        assert_eq!(baked + j["dropped_degenerate"].as_u64().unwrap(), triangles, "{kind}: {j}");
+        assert!(baked > 0, "{kind}: {j}");
+        vlf(&["dump", s(&field), "--verify"]).ok();
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// 8. demo
+
+#[test]
+fn demo_bakes_verifies_and_traces() {
+    // The bundled bunny with automatic parameters takes about a second in the test profile; the
+    // box exercises the same steps in a fraction of that.
+    let dir = tempdir();
+    let out = dir.path().join("demo");
+    let r = vlf(&["demo", "--input", s(&mesh("Box.gltf")), "--output-dir", s(&out)]).ok();
+    assert!(r.stdout.contains("verify: OK"), "{}", r.stdout);
+    assert_eq!(r.stdout.matches("traced").count(), 2, "{}", r.stdout);
+    assert_eq!(names_in(&out), ["demo.vlf", "inside.hits", "inside.rays", "outside.hits", "outside.rays"]);
+    assert_eq!(std::fs::metadata(out.join("outside.rays")).unwrap().len(), 512 * 512 * 32);
+    assert_eq!(std::fs::metadata(out.join("inside.hits")).unwrap().len(), 512 * 512 * 16);
+    assert_eq!(Field::open(out.join("demo.vlf")).unwrap().triangle_count() as u64, BOX_TRIANGLES);
+
+    let r = vlf(&["demo", "--input", s(&dir.path().join("nothing.obj")), "--output-dir", s(&out)]);
+    assert!(r.one_error_line().contains("nothing.obj"));
+}
+
+// ---------------------------------------------------------------------------------------------
+// 9. broken pipe
+
+/// The write end of a pipe whose read end is already closed: any write to it fails with EPIPE.
+///
+/// `Stdio::piped()` on the process under test and dropping our read end would race with the
+/// process's first write (a small output fits the pipe buffer and succeeds if written first, so
+/// the test would pass without exercising the broken pipe). Instead the pipe comes from a helper
+/// process's standard input: the helper (`vlf-bake --version`, which never reads stdin) holds the
+/// only read end and has exited before the process under test starts.
+fn closed_pipe() -> Stdio {
+    let mut helper = command()
+        .arg("--version")
+        .stdin(Stdio::piped())
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("spawn helper");
+    let write_end = helper.stdin.take().expect("piped stdin");
+    assert!(helper.wait().expect("wait for helper").success());
+    Stdio::from(write_end)
+}
+
+#[test]
+fn output_into_a_closed_pipe_is_success() {
+    let dir = tempdir();
+    let field = bake_bunny(dir.path(), "bunny.vlf");
+    let rays = dir.path().join("rays.bin");
+    vlf(&["rays", s(&field), "--width", "8", "--height", "8", "-o", s(&rays)]).ok();
+    let hits = dir.path().join("hits.bin");
+    let (box_mesh, box_field) = (mesh("Box.gltf"), dir.path().join("box.vlf"));
+    let cases: [&[&str]; 5] = [
+        &["dump", s(&field)],
+        &["dump", s(&field), "--json"],
+        &["dump", s(&field), "--verify"],
+        &["trace", s(&field), "--rays", s(&rays), "--out", s(&hits)],
+        &["bake", s(&box_mesh), "-o", s(&box_field), "--directions", "3", "--tiles", "2"],
+    ];
+    for args in cases {
+        let r = run(command().args(args).stdout(closed_pipe()));
+        assert_eq!(r.code, 0, "`{}` into a closed pipe: {r:?}", r.what);
+        assert_eq!(r.stderr, "", "`{}` into a closed pipe", r.what);
+    }
+    // The work behind the output was still done.
+    assert_eq!(std::fs::metadata(&hits).unwrap().len(), 64 * 16);
+    Field::open(&box_field).unwrap();
+}
