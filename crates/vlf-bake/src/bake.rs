@@ -18,8 +18,8 @@ use std::io::{self, BufWriter, Seek, Write};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 use vlf_format::{
-    BeamRecord, HashingWriter, ParamsRecord, Payload, Request, SceneRecord, SectionKind, SectionPayload,
-    StatisticsRecord, TileRecord, VERSION_MAJOR, Z_LEVELS,
+    BeamRecord, FieldFile, HashingWriter, ParamsRecord, Request, SceneRecord, SectionKind, StatisticsRecord,
+    TileRecord, VERSION_MAJOR, Z_LEVELS,
 };
 use vlf_geom::Lattice;
 use vlf_geom::frame::{frame, mul};
@@ -403,7 +403,20 @@ impl Spill {
     }
 }
 
+/// The directory that will hold `path`.
+pub fn parent_dir(path: &Path) -> PathBuf {
+    match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    }
+}
+
 /// Bakes `scene` with the chosen `choice` into the field file `output`, atomically.
+///
+/// The file is written in place, each byte once: the small sections first, then TILES (whose
+/// size is known) filled direction by direction, TRIANGLE_IDS streamed behind it, and
+/// LEAF_BOUNDS (the only section spilled to a temporary file) appended at the end; BEAMS and
+/// STATISTICS are reserved up front and filled last.
 pub fn bake_to_path(
     prep: &Prepared<'_>,
     choice: &Choice,
@@ -414,10 +427,7 @@ pub fn bake_to_path(
     let start = Instant::now();
     let params = &choice.params;
     let scene = prep.scene;
-    let dir = match output.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
+    let dir = parent_dir(output);
     let io_err = |error: io::Error| BakeError::Io { path: output.to_path_buf(), error };
 
     let lattice = Lattice::new(params.lattice_n);
@@ -425,40 +435,8 @@ pub fn bake_to_path(
     let rotations: Vec<[f64; 9]> = directions.iter().map(|&d| frame(d)).collect();
     let dir_records: Vec<[f32; 4]> = directions.iter().map(|d| [d[0] as f32, d[1] as f32, d[2] as f32, 0.0]).collect();
     let lookup = lattice.lookup_table();
-
-    let mut tiles = Spill::new(&dir).map_err(io_err)?;
-    let mut bounds = Spill::new(&dir).map_err(io_err)?;
-    let mut ids = Spill::new(&dir).map_err(io_err)?;
-    let mut beams = Vec::with_capacity(directions.len());
-    let mut stats = StatisticsRecord::zeroed_record();
-    let (mut leaf_base, mut id_base) = (0u64, 0u64);
-
     let l = directions.len();
-    progress.begin("baking directions", l as u64);
-    let chunk = (rayon::current_num_threads() * 4).max(8);
-    for chunk_start in (0..l).step_by(chunk) {
-        let range = chunk_start..(chunk_start + chunk).min(l);
-        let baked: Vec<Result<DirectionData, BakeError>> = range
-            .into_par_iter()
-            .map_init(Scratch::default, |s, j| {
-                let d = bake_direction(prep, params, &rotations[j], j, s);
-                progress.advance(1);
-                d
-            })
-            .collect();
-        for d in baked {
-            let d = d?;
-            tiles.writer.write_all(bytemuck::cast_slice(&d.tiles)).map_err(io_err)?;
-            bounds.writer.write_all(bytemuck::cast_slice(&d.bounds)).map_err(io_err)?;
-            ids.writer.write_all(bytemuck::cast_slice(&d.ids)).map_err(io_err)?;
-            let leaf_count = d.bounds.len() as u64 - 1;
-            beams.push(BeamRecord { leaf_base, leaf_count, id_base, id_count: d.ids.len() as u64 });
-            leaf_base += leaf_count + 1;
-            id_base += d.ids.len() as u64;
-            merge_stats(&mut stats, &d.stats);
-        }
-    }
-    progress.end();
+    let n2 = params.tiles as u64 * params.tiles as u64;
 
     let scene_record = SceneRecord {
         center: prep.center,
@@ -487,37 +465,70 @@ pub fn bake_to_path(
     };
     let hash = input_hash(scene, request);
 
-    let (mut tiles_file, tiles_len, tiles_hash) = tiles.finish().map_err(io_err)?;
-    let (mut bounds_file, bounds_len, bounds_hash) = bounds.finish().map_err(io_err)?;
-    let (mut ids_file, ids_len, ids_hash) = ids.finish().map_err(io_err)?;
+    let tmp = AtomicFile::create(output).map_err(io_err)?;
+    let mut f = FieldFile::create(tmp.file().try_clone().map_err(io_err)?, SectionKind::ALL.len()).map_err(io_err)?;
     let [tri_bytes, prov_bytes, src_bytes, input_bytes, string_bytes] = scene_sections(scene);
-    fn stream(kind: SectionKind, reader: &mut File, length: u64, raw_hash: [u8; 32]) -> SectionPayload<'_> {
-        SectionPayload {
-            kind: kind as u32,
-            element_size: kind.element_size(),
-            payload: Payload::Stream { reader, length, raw_hash },
+    for (kind, bytes) in [
+        (SectionKind::Scene, bytemuck::bytes_of(&scene_record)),
+        (SectionKind::Params, bytemuck::bytes_of(&params_record)),
+        (SectionKind::Directions, bytemuck::cast_slice(&dir_records)),
+        (SectionKind::Rotations, bytemuck::cast_slice(&rotations)),
+        (SectionKind::Lookup, bytemuck::cast_slice(&lookup)),
+        (SectionKind::Triangles, tri_bytes),
+        (SectionKind::Provenance, prov_bytes),
+        (SectionKind::Sources, src_bytes),
+        (SectionKind::Inputs, input_bytes),
+        (SectionKind::Strings, string_bytes),
+    ] {
+        f.append(kind, bytes).map_err(io_err)?;
+    }
+    let mut beams_out = f.reserve(SectionKind::Beams, l as u64 * size_of::<BeamRecord>() as u64).map_err(io_err)?;
+    let mut stats_out = f.reserve(SectionKind::Statistics, size_of::<StatisticsRecord>() as u64).map_err(io_err)?;
+    let mut tiles_out =
+        f.reserve(SectionKind::Tiles, l as u64 * n2 * size_of::<TileRecord>() as u64).map_err(io_err)?;
+    let mut ids_out = f.stream(SectionKind::TriangleIds).map_err(io_err)?;
+    let mut bounds = Spill::new(&dir).map_err(io_err)?;
+
+    let mut beams = Vec::with_capacity(l);
+    let mut stats = StatisticsRecord::zeroed_record();
+    let (mut leaf_base, mut id_base) = (0u64, 0u64);
+    progress.begin("baking directions", l as u64);
+    let chunk = (rayon::current_num_threads() * 4).max(8);
+    for chunk_start in (0..l).step_by(chunk) {
+        let range = chunk_start..(chunk_start + chunk).min(l);
+        let baked: Vec<Result<DirectionData, BakeError>> = range
+            .into_par_iter()
+            .map_init(Scratch::default, |s, j| {
+                let d = bake_direction(prep, params, &rotations[j], j, s);
+                progress.advance(1);
+                d
+            })
+            .collect();
+        for d in baked {
+            let d = d?;
+            tiles_out.write_all(bytemuck::cast_slice(&d.tiles)).map_err(io_err)?;
+            ids_out.write_all(bytemuck::cast_slice(&d.ids)).map_err(io_err)?;
+            bounds.writer.write_all(bytemuck::cast_slice(&d.bounds)).map_err(io_err)?;
+            let leaf_count = d.bounds.len() as u64 - 1;
+            beams.push(BeamRecord { leaf_base, leaf_count, id_base, id_count: d.ids.len() as u64 });
+            leaf_base += leaf_count + 1;
+            id_base += d.ids.len() as u64;
+            merge_stats(&mut stats, &d.stats);
         }
     }
-    let mut sections = vec![
-        SectionPayload::bytes(SectionKind::Scene, bytemuck::bytes_of(&scene_record)),
-        SectionPayload::bytes(SectionKind::Params, bytemuck::bytes_of(&params_record)),
-        SectionPayload::bytes(SectionKind::Directions, bytemuck::cast_slice(&dir_records)),
-        SectionPayload::bytes(SectionKind::Rotations, bytemuck::cast_slice(&rotations)),
-        SectionPayload::bytes(SectionKind::Lookup, bytemuck::cast_slice(&lookup)),
-        SectionPayload::bytes(SectionKind::Beams, bytemuck::cast_slice(&beams)),
-        stream(SectionKind::Tiles, &mut tiles_file, tiles_len, tiles_hash),
-        stream(SectionKind::LeafBounds, &mut bounds_file, bounds_len, bounds_hash),
-        stream(SectionKind::TriangleIds, &mut ids_file, ids_len, ids_hash),
-        SectionPayload::bytes(SectionKind::Triangles, tri_bytes),
-        SectionPayload::bytes(SectionKind::Provenance, prov_bytes),
-        SectionPayload::bytes(SectionKind::Sources, src_bytes),
-        SectionPayload::bytes(SectionKind::Inputs, input_bytes),
-        SectionPayload::bytes(SectionKind::Strings, string_bytes),
-        SectionPayload::bytes(SectionKind::Statistics, bytemuck::bytes_of(&stats)),
-    ];
+    progress.end();
 
     progress.begin("writing", 1);
-    let header = write_atomically(output, &dir, |w| vlf_format::write_field(w, hash, &mut sections)).map_err(io_err)?;
+    f.finish_section(tiles_out).map_err(io_err)?;
+    f.finish_section(ids_out).map_err(io_err)?;
+    let (mut bounds_file, bounds_len, bounds_hash) = bounds.finish().map_err(io_err)?;
+    f.append_from(SectionKind::LeafBounds, &mut bounds_file, bounds_len, bounds_hash).map_err(io_err)?;
+    beams_out.write_all(bytemuck::cast_slice(&beams)).map_err(io_err)?;
+    f.finish_section(beams_out).map_err(io_err)?;
+    stats_out.write_all(bytemuck::bytes_of(&stats)).map_err(io_err)?;
+    f.finish_section(stats_out).map_err(io_err)?;
+    let (_, header) = f.finish(hash).map_err(io_err)?;
+    tmp.commit().map_err(io_err)?;
     progress.end();
 
     Ok(BakeSummary {
@@ -540,31 +551,53 @@ pub fn bake_to_path(
     })
 }
 
-/// Writes a file through `write` into a temporary file next to `path`, flushes and syncs it, and
-/// renames it over `path`. A failure removes the temporary file; a crash leaves `path` untouched.
-pub fn write_atomically<T>(
-    path: &Path,
-    dir: &Path,
-    write: impl FnOnce(&mut BufWriter<File>) -> io::Result<T>,
-) -> io::Result<T> {
-    let name = path.file_name().map_or("field".into(), |n| n.to_string_lossy().into_owned());
-    let prefix = format!(".{name}.");
-    let mut builder = tempfile::Builder::new();
-    builder.prefix(&prefix).suffix(".tmp");
-    // A new file's usual permissions (0666 less the umask), not tempfile's private 0600.
-    #[cfg(unix)]
-    builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
-    let tmp = builder.tempfile_in(dir)?;
-    let (file, tmp_path) = tmp.into_parts();
-    let mut w = BufWriter::with_capacity(1 << 20, file);
-    let value = write(&mut w)?;
-    let file = w.into_inner().map_err(|e| e.into_error())?;
-    file.sync_all()?;
-    tmp_path.persist(path).map_err(|e| e.error)?;
-    // Make the rename itself durable.
-    if let Ok(d) = File::open(dir) {
-        let _ = d.sync_all();
+/// A file being written next to its final path: a temporary file in the same directory, renamed
+/// over the path by [`AtomicFile::commit`] after it is flushed and synced. Dropped without a
+/// commit (an error, a panic), it is removed; a crash leaves the path untouched (and at worst a
+/// `.NAME.*.tmp` file beside it).
+pub struct AtomicFile {
+    tmp: tempfile::NamedTempFile,
+    path: PathBuf,
+}
+
+impl AtomicFile {
+    pub fn create(path: &Path) -> io::Result<AtomicFile> {
+        let dir = parent_dir(path);
+        let name = path.file_name().map_or("field".into(), |n| n.to_string_lossy().into_owned());
+        let prefix = format!(".{name}.");
+        let mut builder = tempfile::Builder::new();
+        builder.prefix(&prefix).suffix(".tmp");
+        // A new file's usual permissions (0666 less the umask), not tempfile's private 0600.
+        #[cfg(unix)]
+        builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
+        Ok(AtomicFile { tmp: builder.tempfile_in(dir)?, path: path.to_path_buf() })
     }
+
+    pub fn file(&self) -> &File {
+        self.tmp.as_file()
+    }
+
+    /// Syncs the file and renames it over the path, then syncs the directory.
+    pub fn commit(self) -> io::Result<()> {
+        self.tmp.as_file().sync_all()?;
+        self.tmp.persist(&self.path).map_err(|e| e.error)?;
+        if let Ok(d) = File::open(parent_dir(&self.path)) {
+            let _ = d.sync_all();
+        }
+        Ok(())
+    }
+}
+
+/// Writes a file atomically through a buffered writer (see [`AtomicFile`]).
+pub fn write_atomically<T>(path: &Path, write: impl FnOnce(&mut BufWriter<&File>) -> io::Result<T>) -> io::Result<T> {
+    let tmp = AtomicFile::create(path)?;
+    let value = {
+        let mut w = BufWriter::with_capacity(1 << 20, tmp.file());
+        let value = write(&mut w)?;
+        w.flush()?;
+        value
+    };
+    tmp.commit()?;
     Ok(value)
 }
 

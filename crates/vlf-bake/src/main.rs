@@ -489,8 +489,7 @@ fn trace(a: &TraceArgs) -> Result<()> {
         field.par_closest_hits(&rays, &mut hits);
     }
     let seconds = start.elapsed().as_secs_f64();
-    let dir = a.out.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
-    vlf_bake::bake::write_atomically(&a.out, dir, |w| w.write_all(bytemuck::cast_slice(&hits)))
+    vlf_bake::bake::write_atomically(&a.out, |w| w.write_all(bytemuck::cast_slice(&hits)))
         .with_context(|| format!("cannot write hits file {}", a.out.display()))?;
     let hit_count = hits.iter().filter(|h| h.prim != u32::MAX).count();
     let invalid = rays.iter().filter(|r| !r.is_valid()).count();
@@ -526,8 +525,7 @@ fn rays(a: &RaysArgs) -> Result<()> {
         View::Inside => vlf_geom::Camera::inside(center, radius, aspect),
     };
     let rays = camera.primary_rays(a.width, a.height);
-    let dir = a.output.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
-    vlf_bake::bake::write_atomically(&a.output, dir, |w| w.write_all(bytemuck::cast_slice(&rays)))
+    vlf_bake::bake::write_atomically(&a.output, |w| w.write_all(bytemuck::cast_slice(&rays)))
         .with_context(|| format!("cannot write rays file {}", a.output.display()))?;
     Ok(())
 }
@@ -538,8 +536,7 @@ fn gen_scene(a: &GenArgs) -> Result<()> {
         SceneKind::Grid => ("grid", generate::grid(a.count as u32, 4, 1.0)),
         SceneKind::Slivers => ("slivers", generate::slivers(a.count, a.seed)),
     };
-    let dir = a.output.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
-    vlf_bake::bake::write_atomically(&a.output, dir, |w| generate::write_obj(w, name, &tris))
+    vlf_bake::bake::write_atomically(&a.output, |w| generate::write_obj(w, name, &tris))
         .with_context(|| format!("cannot write {}", a.output.display()))?;
     Ok(())
 }

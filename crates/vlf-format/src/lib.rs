@@ -4,8 +4,8 @@
 //! - [`layout`]: the on-disk structs, `#[repr(C)]` and `Pod`, sizes asserted at compile time;
 //! - [`reader`]: a zero-copy reader that validates the header and section table in time
 //!   independent of the file size and hands out typed slices;
-//! - [`writer`]: a writer that lays every section out before writing and streams big sections
-//!   from spill files;
+//! - [`writer`]: a writer that places sections in a file in place, each byte written once, with
+//!   big sections streamed or filled while others are written;
 //! - [`verify`]: the full verification behind `vlf-bake dump --verify`.
 //!
 //! Errors are values ([`FormatError`]), never panics, whatever the input bytes.
@@ -23,4 +23,4 @@ pub use error::{FormatError, hex};
 pub use layout::*;
 pub use reader::{FieldReader, content_hash, read_header_and_table};
 pub use verify::{VerifyReport, verify};
-pub use writer::{HashingWriter, Payload, SectionPayload, write_field};
+pub use writer::{FieldFile, HashingWriter, SectionWriter};

@@ -1,129 +1,269 @@
-//! The writer: lays out every section before writing a byte (so the table, with every section's
-//! hash, can come first), then streams header, table and sections to any `Write` in one pass.
+//! The writer: a field file written in place, each byte once.
 //!
-//! Sections come either as bytes in memory or as a reader (a spill file) whose length and
-//! BLAKE3 the caller already knows, so a field of many GiB is written without holding it in
-//! memory. Atomic replacement of the output path is the caller's business (`vlf-bake` writes a
-//! temporary file in the output directory and renames it).
+//! [`FieldFile`] reserves the header and section table at the start of the file, then places
+//! sections one after another at 64-byte boundaries, in the order they are added (which is the
+//! table's order, sorted by offset as the spec requires). A section is either appended from bytes
+//! in memory, reserved with a known length and filled later (possibly while other sections are
+//! written), or streamed with a length known only when it ends. Every section is hashed as it is
+//! written; [`FieldFile::finish`] writes the table and the header with the content hash over both
+//! (§3.1), which is why sections may be written in any order.
+//!
+//! Atomic replacement of the output path is the caller's business (`vlf-bake` writes into a
+//! temporary file in the output directory, syncs it and renames it).
 
 use crate::layout::*;
 use crate::reader::content_hash;
+use std::fs::File;
 use std::io::{self, Read, Write};
 
-/// Where a section's bytes come from.
-pub enum Payload<'a> {
-    /// Bytes in memory; the writer hashes them.
-    Bytes(&'a [u8]),
-    /// `length` bytes to be read from `reader`, whose BLAKE3 is `raw_hash` (computed by the
-    /// caller while producing them, for example with [`HashingWriter`]). The writer checks the
-    /// length it copies.
-    Stream { reader: &'a mut dyn Read, length: u64, raw_hash: [u8; 32] },
-}
-
-/// One section to write.
-pub struct SectionPayload<'a> {
-    pub kind: u32,
-    pub element_size: u32,
-    pub payload: Payload<'a>,
-}
-
-impl<'a> SectionPayload<'a> {
-    pub fn bytes(kind: SectionKind, bytes: &'a [u8]) -> Self {
-        SectionPayload { kind: kind as u32, element_size: kind.element_size(), payload: Payload::Bytes(bytes) }
+/// Writes all of `buf` at `offset` without moving a shared cursor.
+fn write_all_at(file: &File, buf: &[u8], offset: u64) -> io::Result<()> {
+    #[cfg(unix)]
+    {
+        std::os::unix::fs::FileExt::write_all_at(file, buf, offset)
     }
-
-    fn length(&self) -> u64 {
-        match &self.payload {
-            Payload::Bytes(b) => b.len() as u64,
-            Payload::Stream { length, .. } => *length,
+    #[cfg(windows)]
+    {
+        let (mut buf, mut offset) = (buf, offset);
+        while !buf.is_empty() {
+            let n = std::os::windows::fs::FileExt::seek_write(file, buf, offset)?;
+            if n == 0 {
+                return Err(io::ErrorKind::WriteZero.into());
+            }
+            buf = &buf[n..];
+            offset += n as u64;
         }
+        Ok(())
     }
 }
 
-/// Offsets of a laid-out file, before any byte is written.
-pub fn layout(lengths: &[u64]) -> (Vec<u64>, u64) {
-    let mut pos = (HEADER_SIZE + TABLE_ENTRY_SIZE * lengths.len()) as u64;
-    let mut offsets = Vec::with_capacity(lengths.len());
-    for &len in lengths {
-        pos = pos.next_multiple_of(SECTION_ALIGN);
-        offsets.push(pos);
-        pos += len;
-    }
-    (offsets, pos)
+/// A field file being written. See the module documentation.
+pub struct FieldFile {
+    file: File,
+    table: Vec<SectionEntry>,
+    /// Sections handed out as writers and not yet finished (their table index).
+    open: Vec<usize>,
+    capacity: usize,
+    end: u64,
 }
 
-/// Writes a complete field to `out` and returns its header. Sections are written raw, in the
-/// order given, each at the next multiple of 64.
-pub fn write_field<W: Write>(
-    out: &mut W,
-    input_hash: [u8; 32],
-    sections: &mut [SectionPayload<'_>],
-) -> io::Result<Header> {
-    if sections.len() > MAX_SECTIONS as usize {
-        return Err(io::Error::new(io::ErrorKind::InvalidInput, "too many sections"));
-    }
-    let lengths: Vec<u64> = sections.iter().map(|s| s.length()).collect();
-    let (offsets, file_length) = layout(&lengths);
+/// A section being written sequentially at its own offset. Buffered; hashes what it writes.
+pub struct SectionWriter {
+    file: File,
+    index: usize,
+    start: u64,
+    /// `Some(n)` for a reserved section that must be exactly `n` bytes long.
+    reserved: Option<u64>,
+    written: u64,
+    buf: Vec<u8>,
+    hasher: blake3::Hasher,
+}
 
-    let table: Vec<SectionEntry> = sections
-        .iter()
-        .zip(&offsets)
-        .map(|(s, &offset)| SectionEntry {
-            kind: s.kind,
+const BUFFER: usize = 1 << 20;
+
+fn invalid(msg: String) -> io::Error {
+    io::Error::new(io::ErrorKind::InvalidInput, msg)
+}
+
+impl FieldFile {
+    /// Starts a field in `file` (empty, writable) that will hold `sections` sections.
+    pub fn create(file: File, sections: usize) -> io::Result<FieldFile> {
+        if sections > MAX_SECTIONS as usize {
+            return Err(invalid(format!("{sections} sections exceed the limit of {MAX_SECTIONS}")));
+        }
+        file.set_len(0)?;
+        let end = (HEADER_SIZE + TABLE_ENTRY_SIZE * sections) as u64;
+        Ok(FieldFile { file, table: Vec::with_capacity(sections), open: Vec::new(), capacity: sections, end })
+    }
+
+    fn place(&mut self, kind: u32, element_size: u32, length: u64) -> io::Result<(usize, u64)> {
+        if self.table.len() == self.capacity {
+            return Err(invalid(format!("more sections than the {} announced", self.capacity)));
+        }
+        if self.open.iter().any(|&i| self.table[i].stored_length == u64::MAX) {
+            return Err(invalid("a streamed section is still open; finish it before adding sections".into()));
+        }
+        let offset = self.end.next_multiple_of(SECTION_ALIGN);
+        self.table.push(SectionEntry {
+            kind,
             codec: codec::RAW,
             offset,
-            stored_length: s.length(),
-            raw_length: s.length(),
-            element_size: s.element_size,
+            stored_length: length,
+            raw_length: length,
+            element_size,
             reserved: 0,
-            raw_hash: match &s.payload {
-                Payload::Bytes(b) => *blake3::hash(b).as_bytes(),
-                Payload::Stream { raw_hash, .. } => *raw_hash,
-            },
-        })
-        .collect();
-    let mut header = Header {
-        magic: MAGIC,
-        version_major: VERSION_MAJOR,
-        version_minor: VERSION_MINOR,
-        header_size: HEADER_SIZE as u32,
-        file_length,
-        table_offset: HEADER_SIZE as u64,
-        section_count: sections.len() as u32,
-        table_entry_size: TABLE_ENTRY_SIZE as u32,
-        flags: 0,
-        reserved0: 0,
-        content_hash: [0; 32],
-        input_hash,
-        reserved1: [0; 16],
-    };
-    let mut head = Vec::with_capacity(HEADER_SIZE + TABLE_ENTRY_SIZE * table.len());
-    head.extend_from_slice(bytemuck::bytes_of(&header));
-    head.extend_from_slice(bytemuck::cast_slice(&table));
-    header.content_hash = content_hash(&head);
-    head[CONTENT_HASH_RANGE].copy_from_slice(&header.content_hash);
+            raw_hash: [0; 32],
+        });
+        if length != u64::MAX {
+            self.end = offset + length;
+        }
+        Ok((self.table.len() - 1, offset))
+    }
 
-    out.write_all(&head)?;
-    let mut pos = head.len() as u64;
-    let zeros = [0u8; SECTION_ALIGN as usize];
-    for (section, &offset) in sections.iter_mut().zip(&offsets) {
-        out.write_all(&zeros[..(offset - pos) as usize])?;
-        match &mut section.payload {
-            Payload::Bytes(b) => out.write_all(b)?,
-            Payload::Stream { reader, length, .. } => {
-                let copied = io::copy(&mut reader.take(*length), out)?;
-                if copied != *length {
-                    return Err(io::Error::new(
-                        io::ErrorKind::UnexpectedEof,
-                        format!("section {} stream ended after {copied} of {length} bytes", kind_name(section.kind)),
-                    ));
-                }
+    /// Appends a section from bytes in memory.
+    pub fn append(&mut self, kind: SectionKind, bytes: &[u8]) -> io::Result<()> {
+        let (index, offset) = self.place(kind as u32, kind.element_size(), bytes.len() as u64)?;
+        write_all_at(&self.file, bytes, offset)?;
+        self.table[index].raw_hash = *blake3::hash(bytes).as_bytes();
+        Ok(())
+    }
+
+    /// Appends a section of `length` bytes read from `reader`, whose BLAKE3 is `raw_hash`
+    /// (computed while it was produced, for example by a spill file's [`SectionWriter`]-like
+    /// hashing). Copies through a buffer; the length is checked.
+    pub fn append_from(
+        &mut self,
+        kind: SectionKind,
+        reader: &mut dyn Read,
+        length: u64,
+        raw_hash: [u8; 32],
+    ) -> io::Result<()> {
+        let (index, offset) = self.place(kind as u32, kind.element_size(), length)?;
+        let mut buf = vec![0u8; BUFFER.min(length as usize).max(1)];
+        let mut done = 0u64;
+        while done < length {
+            let want = buf.len().min((length - done) as usize);
+            reader.read_exact(&mut buf[..want])?;
+            write_all_at(&self.file, &buf[..want], offset + done)?;
+            done += want as u64;
+        }
+        self.table[index].raw_hash = raw_hash;
+        Ok(())
+    }
+
+    /// Reserves a section of exactly `length` bytes, to be filled through the returned writer
+    /// (while other sections are added) and closed with [`FieldFile::finish_section`].
+    pub fn reserve(&mut self, kind: SectionKind, length: u64) -> io::Result<SectionWriter> {
+        let (index, offset) = self.place(kind as u32, kind.element_size(), length)?;
+        self.open.push(index);
+        self.writer(index, offset, Some(length))
+    }
+
+    /// Starts a section whose length is known only when it ends. Until it is finished with
+    /// [`FieldFile::finish_section`], no other section can be added (reserved ones can be filled).
+    pub fn stream(&mut self, kind: SectionKind) -> io::Result<SectionWriter> {
+        let (index, offset) = self.place(kind as u32, kind.element_size(), u64::MAX)?;
+        self.open.push(index);
+        self.writer(index, offset, None)
+    }
+
+    fn writer(&self, index: usize, start: u64, reserved: Option<u64>) -> io::Result<SectionWriter> {
+        Ok(SectionWriter {
+            file: self.file.try_clone()?,
+            index,
+            start,
+            reserved,
+            written: 0,
+            buf: Vec::with_capacity(BUFFER),
+            hasher: blake3::Hasher::new(),
+        })
+    }
+
+    /// Closes a section opened with [`FieldFile::reserve`] or [`FieldFile::stream`].
+    pub fn finish_section(&mut self, mut w: SectionWriter) -> io::Result<()> {
+        w.flush_buf()?;
+        let pos = self.open.iter().position(|&i| i == w.index).ok_or_else(|| invalid("section is not open".into()))?;
+        self.open.swap_remove(pos);
+        let e = &mut self.table[w.index];
+        if let Some(len) = w.reserved {
+            if w.written != len {
+                return Err(invalid(format!(
+                    "section {} reserved {len} bytes but {} were written",
+                    kind_name(e.kind),
+                    w.written
+                )));
+            }
+        } else {
+            e.stored_length = w.written;
+            e.raw_length = w.written;
+            self.end = w.start + w.written;
+        }
+        if e.raw_length % e.element_size as u64 != 0 {
+            return Err(invalid(format!("section {} is not a whole number of elements", kind_name(e.kind))));
+        }
+        e.raw_hash = *w.hasher.finalize().as_bytes();
+        Ok(())
+    }
+
+    /// Writes the section table and the header (with the content hash and `input_hash`) and
+    /// returns the file and the header. Every announced section must have been added and closed.
+    pub fn finish(self, input_hash: [u8; 32]) -> io::Result<(File, Header)> {
+        if !self.open.is_empty() || self.table.len() != self.capacity {
+            return Err(invalid(format!(
+                "{} of {} sections added, {} still open",
+                self.table.len(),
+                self.capacity,
+                self.open.len()
+            )));
+        }
+        // Pad the end so the file ends exactly where its last section does (already true) and
+        // make sure the length is right even if the last section was empty.
+        self.file.set_len(self.end)?;
+        let mut header = Header {
+            magic: MAGIC,
+            version_major: VERSION_MAJOR,
+            version_minor: VERSION_MINOR,
+            header_size: HEADER_SIZE as u32,
+            file_length: self.end,
+            table_offset: HEADER_SIZE as u64,
+            section_count: self.table.len() as u32,
+            table_entry_size: TABLE_ENTRY_SIZE as u32,
+            flags: 0,
+            reserved0: 0,
+            content_hash: [0; 32],
+            input_hash,
+            reserved1: [0; 16],
+        };
+        let mut head = Vec::with_capacity(HEADER_SIZE + TABLE_ENTRY_SIZE * self.table.len());
+        head.extend_from_slice(bytemuck::bytes_of(&header));
+        head.extend_from_slice(bytemuck::cast_slice(&self.table));
+        header.content_hash = content_hash(&head);
+        head[CONTENT_HASH_RANGE].copy_from_slice(&header.content_hash);
+        write_all_at(&self.file, &head, 0)?;
+        Ok((self.file, header))
+    }
+}
+
+impl SectionWriter {
+    fn flush_buf(&mut self) -> io::Result<()> {
+        if !self.buf.is_empty() {
+            let at = self.start + self.written - self.buf.len() as u64;
+            write_all_at(&self.file, &self.buf, at)?;
+            self.buf.clear();
+        }
+        Ok(())
+    }
+
+    /// Bytes written so far.
+    pub fn written(&self) -> u64 {
+        self.written
+    }
+}
+
+impl Write for SectionWriter {
+    fn write(&mut self, data: &[u8]) -> io::Result<usize> {
+        if let Some(len) = self.reserved {
+            if self.written + data.len() as u64 > len {
+                return Err(invalid(format!("write past the end of a {len}-byte reserved section")));
             }
         }
-        pos = offset + section.length();
+        // `written` counts buffered bytes too; the buffer holds the last `buf.len()` of them.
+        if self.buf.len() + data.len() > BUFFER {
+            self.flush_buf()?;
+        }
+        self.hasher.update(data);
+        if data.len() >= BUFFER {
+            write_all_at(&self.file, data, self.start + self.written)?;
+        } else {
+            self.buf.extend_from_slice(data);
+        }
+        self.written += data.len() as u64;
+        Ok(data.len())
     }
-    debug_assert_eq!(pos, file_length);
-    Ok(header)
+
+    fn flush(&mut self) -> io::Result<()> {
+        self.flush_buf()
+    }
 }
 
 /// A `Write` adapter that hashes and counts what passes through, for spilling a section to a
@@ -156,5 +296,45 @@ impl<W: Write> Write for HashingWriter<W> {
 
     fn flush(&mut self) -> io::Result<()> {
         self.inner.flush()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Sections added in any mix of append, reserve and stream read back with the right bytes,
+    /// hashes and layout; misuse is an error, not a corrupt file.
+    #[test]
+    fn a_mixed_write_reads_back() {
+        let tmp = std::env::temp_dir().join(format!("vlf-writer-test-{}", std::process::id()));
+        let file = File::options().read(true).write(true).create(true).truncate(true).open(&tmp).unwrap();
+        let mut f = FieldFile::create(file, 3).unwrap();
+        f.append(SectionKind::Strings, b"hello").unwrap();
+        let mut reserved = f.reserve(SectionKind::LeafBounds, 8).unwrap();
+        let mut streamed = f.stream(SectionKind::TriangleIds).unwrap();
+        assert!(f.append(SectionKind::Scene, &[0; 128]).is_err(), "no section may follow an open stream");
+        streamed.write_all(&[1, 0, 0, 0, 2, 0, 0, 0, 3, 0, 0, 0]).unwrap();
+        reserved.write_all(&[9, 0, 0, 0]).unwrap();
+        reserved.write_all(&[8, 0, 0, 0]).unwrap();
+        assert!(reserved.write_all(&[0]).is_err(), "a reserved section cannot overflow");
+        f.finish_section(streamed).unwrap();
+        f.finish_section(reserved).unwrap();
+        let (_, header) = f.finish([7; 32]).unwrap();
+        let bytes = std::fs::read(&tmp).unwrap();
+        std::fs::remove_file(&tmp).unwrap();
+        assert_eq!(header.file_length, bytes.len() as u64);
+        let (h, table) = crate::reader::read_header_and_table(&bytes).unwrap();
+        assert_eq!(h.input_hash, [7; 32]);
+        let kinds: Vec<u32> = table.iter().map(|e| e.kind).collect();
+        assert_eq!(
+            kinds,
+            [SectionKind::Strings as u32, SectionKind::LeafBounds as u32, SectionKind::TriangleIds as u32]
+        );
+        for e in table {
+            let raw = &bytes[e.offset as usize..(e.offset + e.stored_length) as usize];
+            assert_eq!(*blake3::hash(raw).as_bytes(), e.raw_hash);
+        }
+        assert_eq!(&bytes[table[1].offset as usize..][..8], &[9, 0, 0, 0, 8, 0, 0, 0]);
     }
 }
