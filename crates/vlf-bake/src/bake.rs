@@ -489,34 +489,63 @@ pub fn bake_to_path(
     let mut ids_out = f.stream(SectionKind::TriangleIds).map_err(io_err)?;
     let mut bounds = Spill::new(&dir).map_err(io_err)?;
 
-    let mut beams = Vec::with_capacity(l);
-    let mut stats = StatisticsRecord::zeroed_record();
-    let (mut leaf_base, mut id_base) = (0u64, 0u64);
-    progress.begin("baking directions", l as u64);
+    // Directions are baked in parallel, chunk by chunk; a writer thread appends each finished
+    // chunk in direction order while the next one is computed. The channel holds at most two
+    // chunks, which bounds memory.
     let chunk = (rayon::current_num_threads() * 4).max(8);
-    for chunk_start in (0..l).step_by(chunk) {
-        let range = chunk_start..(chunk_start + chunk).min(l);
-        let baked: Vec<Result<DirectionData, BakeError>> = range
-            .into_par_iter()
-            .map_init(Scratch::default, |s, j| {
-                let d = bake_direction(prep, params, &rotations[j], j, s);
-                progress.advance(1);
-                d
-            })
-            .collect();
-        for d in baked {
-            let d = d?;
-            tiles_out.write_all(bytemuck::cast_slice(&d.tiles)).map_err(io_err)?;
-            ids_out.write_all(bytemuck::cast_slice(&d.ids)).map_err(io_err)?;
-            bounds.writer.write_all(bytemuck::cast_slice(&d.bounds)).map_err(io_err)?;
-            let leaf_count = d.bounds.len() as u64 - 1;
-            beams.push(BeamRecord { leaf_base, leaf_count, id_base, id_count: d.ids.len() as u64 });
-            leaf_base += leaf_count + 1;
-            id_base += d.ids.len() as u64;
-            merge_stats(&mut stats, &d.stats);
+    let (send, receive) = std::sync::mpsc::sync_channel::<Vec<DirectionData>>(2);
+    progress.begin("baking directions", l as u64);
+    let (tiles_w, ids_w, bounds_w) = (&mut tiles_out, &mut ids_out, &mut bounds.writer);
+    let (written, baked) = std::thread::scope(|scope| {
+        let writer = scope.spawn(move || -> io::Result<(Vec<BeamRecord>, StatisticsRecord)> {
+            let mut beams = Vec::with_capacity(l);
+            let mut stats = StatisticsRecord::zeroed_record();
+            let (mut leaf_base, mut id_base) = (0u64, 0u64);
+            for chunk in receive {
+                for d in chunk {
+                    tiles_w.write_all(bytemuck::cast_slice(&d.tiles))?;
+                    ids_w.write_all(bytemuck::cast_slice(&d.ids))?;
+                    bounds_w.write_all(bytemuck::cast_slice(&d.bounds))?;
+                    let leaf_count = d.bounds.len() as u64 - 1;
+                    beams.push(BeamRecord { leaf_base, leaf_count, id_base, id_count: d.ids.len() as u64 });
+                    leaf_base += leaf_count + 1;
+                    id_base += d.ids.len() as u64;
+                    merge_stats(&mut stats, &d.stats);
+                }
+            }
+            Ok((beams, stats))
+        });
+        let mut baked = Ok(());
+        for chunk_start in (0..l).step_by(chunk) {
+            let range = chunk_start..(chunk_start + chunk).min(l);
+            let result: Result<Vec<DirectionData>, BakeError> = range
+                .into_par_iter()
+                .map_init(Scratch::default, |s, j| {
+                    let d = bake_direction(prep, params, &rotations[j], j, s);
+                    progress.advance(1);
+                    d
+                })
+                .collect();
+            match result {
+                // A send fails only if the writer stopped on an error, which join reports below.
+                Ok(chunk) => {
+                    if send.send(chunk).is_err() {
+                        break;
+                    }
+                }
+                Err(e) => {
+                    baked = Err(e);
+                    break;
+                }
+            }
         }
-    }
+        drop(send);
+        let written = writer.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic));
+        (written, baked)
+    });
     progress.end();
+    baked?;
+    let (beams, stats) = written.map_err(io_err)?;
 
     progress.begin("writing", 1);
     f.finish_section(tiles_out).map_err(io_err)?;
