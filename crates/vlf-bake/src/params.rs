@@ -179,16 +179,24 @@ pub fn choose(prep: &Prepared<'_>, config: &BakeConfig) -> Result<Choice, BakeEr
         });
     }
 
-    // Rungs consistent with whatever was fixed by the user.
-    let rungs: Vec<(u32, u32)> = LADDER
-        .iter()
-        .map(|&(ln, t)| (explicit_n.unwrap_or(ln), config.tiles.unwrap_or(t)))
-        .fold(Vec::new(), |mut v, r| {
-            if !v.contains(&r) {
-                v.push(r);
-            }
-            v
-        });
+    // Rungs consistent with whatever the user fixed, coarse to fine. A ray crosses about
+    // 1 + 2n/N tiles (n tiles per side, lattice N; docs/architecture.md), so with the tiles fixed
+    // the lattice climbs towards N = n/2, and with the lattice fixed the tiles climb towards 4N.
+    let rungs: Vec<(u32, u32)> = match (explicit_n, config.tiles) {
+        (None, None) => LADDER.to_vec(),
+        (None, Some(t)) => {
+            let top = (t / 2).clamp(2, 64);
+            [2, 4, 8, 16, 32, 64].into_iter().filter(|&ln| ln <= top).map(|ln| (ln, t)).collect()
+        }
+        (Some(ln), None) => {
+            let top = (4 * ln).clamp(8, 256);
+            [8, 16, 32, 64, 128, 256].into_iter().filter(|&t| t <= top).map(|t| (ln, t)).collect()
+        }
+        (Some(_), Some(_)) => unreachable!("handled above"),
+    };
+    // Finer tiles stop paying once tiles are nearly singular; more directions always shorten the
+    // walk, so with the tiles fixed only the budget stops the climb.
+    let sparse_stop = config.tiles.is_none();
     let mut chosen: Option<(Params, u64, f64)> = None;
     for &(lattice_n, tiles) in &rungs {
         if lower_bound_bytes(tris, lattice_n, tiles) > auto_budget {
@@ -200,7 +208,7 @@ pub fn choose(prep: &Prepared<'_>, config: &BakeConfig) -> Result<Choice, BakeEr
             break;
         }
         chosen = Some((p, bytes, load));
-        if load <= SPARSE_TILE_LOAD {
+        if sparse_stop && load <= SPARSE_TILE_LOAD {
             break;
         }
     }
