@@ -1,0 +1,445 @@
+//! The baseline the paper measures the visibility field against (§5, §6.1): single-ray Coherent
+//! Ray Tracing (Wald, Slusallek, Benthin and Wagner, Eurographics 2001), i.e. a kd-tree (axis-
+//! aligned BSP tree) with spatial-median splitting planes, built to a maximum depth and a maximum
+//! leaf size, traversed front to back with an explicit stack and the triangle kernel inlined.
+//!
+//! Everything except the acceleration structure is shared with the field runtime, so that a
+//! benchmark measures the structure and nothing else: the same [`Ray`] and [`Hit`] types, the same
+//! [`Intersector`] trait and the same watertight kernel ([`TriRay::intersect`]), called exactly as
+//! [`vlf_geom::BruteForce`] calls it. A correct tree therefore returns the closest `t`
+//! bit-identical to the brute force.
+//!
+//! # Robustness
+//!
+//! The build references a triangle in every leaf whose closed box it comes within `μ` of (a
+//! relative margin of 2⁻³² of the scene's magnitude; see [`build`](KdTree::build)); the traversal
+//! computes in f64, whose rounding stays far below `μ`, so the leaves a query visits can only hold
+//! *more* candidates than exact arithmetic would give, never fewer. Rays parallel to an axis (a
+//! zero direction component, where `0 · ∞` would give NaN) and rays lying exactly in a splitting
+//! plane are handled explicitly: such a ray visits one child, which suffices because every point
+//! on the plane belongs to both closed child boxes.
+//!
+//! Queries allocate nothing: the traversal stack is a fixed array of [`MAX_DEPTH`] entries.
+
+#![forbid(unsafe_code)]
+
+mod build;
+
+use vlf_geom::{Hit, Intersector, Ray, TriRay};
+
+/// The deepest tree the build makes, whatever [`KdParams::max_depth`] asks for; it bounds the
+/// traversal stack.
+pub const MAX_DEPTH: u32 = 64;
+
+/// Build parameters: the two knobs the paper tunes for CRT (§6.1).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct KdParams {
+    /// A node at this depth (the root has depth 0) becomes a leaf. Clamped to [`MAX_DEPTH`];
+    /// 0 gives a single leaf holding every triangle.
+    pub max_depth: u32,
+    /// A node with at most this many triangle references becomes a leaf.
+    pub leaf_size: u32,
+}
+
+impl Default for KdParams {
+    /// A typical CRT setting: depth 20, at most 2 triangles per leaf.
+    fn default() -> Self {
+        KdParams { max_depth: 20, leaf_size: 2 }
+    }
+}
+
+/// One 8-byte node, as in Wald's thesis: the split position (or a leaf's triangle count) and a
+/// word whose low two bits hold the axis (0, 1, 2) or 3 for a leaf, and whose upper 30 bits hold
+/// the index of the first of the two adjacent children (or the offset of a leaf's triangle list).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(C)]
+pub struct KdNode {
+    word: u32,
+    link: u32,
+}
+
+const LEAF: u32 = 3;
+
+/// The largest child index or triangle-list offset a node can hold.
+pub const MAX_LINK: u32 = (1 << 30) - 1;
+
+impl KdNode {
+    fn inner(axis: usize, split: f32, first_child: u32) -> Self {
+        assert!(first_child <= MAX_LINK, "kd-tree too large: more than 2^30 nodes");
+        KdNode { word: split.to_bits(), link: first_child << 2 | axis as u32 }
+    }
+
+    fn leaf(offset: u32, count: u32) -> Self {
+        assert!(offset <= MAX_LINK, "kd-tree too large: more than 2^30 triangle references");
+        KdNode { word: count, link: offset << 2 | LEAF }
+    }
+
+    /// Whether this is a leaf.
+    #[inline(always)]
+    pub fn is_leaf(self) -> bool {
+        self.link & 3 == LEAF
+    }
+
+    /// The split axis of an inner node (3 for a leaf).
+    #[inline(always)]
+    pub fn axis(self) -> usize {
+        (self.link & 3) as usize
+    }
+
+    /// The splitting plane's coordinate of an inner node.
+    #[inline(always)]
+    pub fn split(self) -> f32 {
+        f32::from_bits(self.word)
+    }
+
+    /// The index of an inner node's lower child; the upper child follows it.
+    #[inline(always)]
+    pub fn first_child(self) -> usize {
+        (self.link >> 2) as usize
+    }
+
+    /// A leaf's range in the triangle-reference list.
+    #[inline(always)]
+    pub fn references(self) -> std::ops::Range<usize> {
+        let start = (self.link >> 2) as usize;
+        start..start + self.word as usize
+    }
+}
+
+/// What a built tree looks like ([`KdTree::stats`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct KdTreeStats {
+    /// Nodes, inner and leaf.
+    pub nodes: u64,
+    pub leaves: u64,
+    /// Leaves holding no triangle (spatial-median splits make many).
+    pub empty_leaves: u64,
+    /// The depth of the deepest leaf (the root has depth 0).
+    pub max_depth: u32,
+    /// Triangle references over all leaves (a straddling triangle counts once per leaf).
+    pub references: u64,
+    /// Triangles stored (input triangles that lie in some leaf: all of them).
+    pub triangles: u64,
+    /// Heap bytes of the nodes, reference list and triangles.
+    pub bytes: u64,
+}
+
+/// Counters of the work queries did (the paper's Figure 4 counts intersections per frame).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct KdStats {
+    /// Queries that reached the tree (valid rays that meet the scene box).
+    pub rays: u64,
+    /// Nodes visited, inner and leaf.
+    pub nodes: u64,
+    /// Leaves visited.
+    pub leaves: u64,
+    /// Ray/triangle tests (a triangle referenced by several visited leaves counts each time:
+    /// there is no mailboxing, as in CRT).
+    pub triangle_tests: u64,
+}
+
+impl KdStats {
+    pub fn add(&mut self, other: &KdStats) {
+        self.rays += other.rays;
+        self.nodes += other.nodes;
+        self.leaves += other.leaves;
+        self.triangle_tests += other.triangle_tests;
+    }
+}
+
+/// What a traversal counts. `()` counts nothing and compiles away.
+pub trait Counter {
+    fn ray(&mut self) {}
+    fn node(&mut self) {}
+    fn leaf(&mut self) {}
+    fn test(&mut self) {}
+}
+
+impl Counter for () {}
+
+impl Counter for KdStats {
+    #[inline(always)]
+    fn ray(&mut self) {
+        self.rays += 1;
+    }
+    #[inline(always)]
+    fn node(&mut self) {
+        self.nodes += 1;
+    }
+    #[inline(always)]
+    fn leaf(&mut self) {
+        self.leaves += 1;
+    }
+    #[inline(always)]
+    fn test(&mut self) {
+        self.triangle_tests += 1;
+    }
+}
+
+/// A spatial-median kd-tree over a triangle soup. Owns its triangles (reordered by first use in
+/// leaf order, for locality; hits report the input index).
+#[derive(Clone, Debug)]
+pub struct KdTree {
+    params: KdParams,
+    /// Nodes; the root is node 0. The two children of an inner node are adjacent.
+    nodes: Vec<KdNode>,
+    /// The leaves' triangle lists, concatenated: indices into `triangles`.
+    references: Vec<u32>,
+    /// Triangles in storage order.
+    triangles: Vec<[[f32; 3]; 3]>,
+    /// The input index of each stored triangle.
+    prims: Vec<u32>,
+    /// The scene box grown by `margin` (the ray is clipped to it), in f64; `None` when empty.
+    root: Option<([f64; 3], [f64; 3])>,
+    /// The exact scene box.
+    bounds: Option<([f32; 3], [f32; 3])>,
+    margin: f64,
+    max_depth_reached: u32,
+}
+
+/// One traversal stack entry: a node still to visit and its ray-parameter interval.
+#[derive(Clone, Copy)]
+struct Entry {
+    node: u32,
+    t0: f64,
+    t1: f64,
+}
+
+impl KdTree {
+    /// Builds the tree (see the crate docs and `docs/kdtree.md`). Each node's box is split at
+    /// the midpoint of its longest axis; a node becomes a leaf at `params.max_depth`, when it
+    /// holds at most `params.leaf_size` references, or when the split would send every reference
+    /// to both children. A triangle straddling the plane goes to both children, to each only if
+    /// the triangle clipped to the child's box (grown by the margin) is not empty. Deterministic:
+    /// the same input gives the same tree, whatever the thread count. Parallel over subtrees.
+    pub fn build(triangles: &[[[f32; 3]; 3]], params: KdParams) -> KdTree {
+        build::build(triangles, params)
+    }
+
+    /// The parameters the tree was built with (depth clamped to [`MAX_DEPTH`]).
+    pub fn params(&self) -> KdParams {
+        self.params
+    }
+
+    /// The scene's bounding box (exact, over all input vertices), or `None` for an empty tree.
+    pub fn bounds(&self) -> Option<([f32; 3], [f32; 3])> {
+        self.bounds
+    }
+
+    /// The margin `μ` by which the build grew every triangle's reach (2⁻³² of the scene's
+    /// largest coordinate magnitude).
+    pub fn margin(&self) -> f64 {
+        self.margin
+    }
+
+    /// The nodes; the root is `nodes()[0]`.
+    pub fn nodes(&self) -> &[KdNode] {
+        &self.nodes
+    }
+
+    /// Input indices of the triangles referenced by leaf `node` (empty for an inner node).
+    pub fn leaf_triangles(&self, node: usize) -> impl Iterator<Item = u32> + '_ {
+        let n = self.nodes[node];
+        let range = if n.is_leaf() { n.references() } else { 0..0 };
+        self.references[range].iter().map(|&i| self.prims[i as usize])
+    }
+
+    /// Size and shape of the tree.
+    pub fn stats(&self) -> KdTreeStats {
+        let leaves = self.nodes.iter().filter(|n| n.is_leaf());
+        let empty = leaves.clone().filter(|n| n.references().is_empty()).count();
+        let bytes = self.nodes.capacity() * size_of::<KdNode>()
+            + self.references.capacity() * size_of::<u32>()
+            + self.triangles.capacity() * size_of::<[[f32; 3]; 3]>()
+            + self.prims.capacity() * size_of::<u32>();
+        KdTreeStats {
+            nodes: self.nodes.len() as u64,
+            leaves: leaves.count() as u64,
+            empty_leaves: empty as u64,
+            max_depth: self.max_depth_reached,
+            references: self.references.len() as u64,
+            triangles: self.triangles.len() as u64,
+            bytes: bytes as u64,
+        }
+    }
+
+    /// The closest hit on `[tmin, tmax]`, if any.
+    #[inline]
+    pub fn closest_hit(&self, ray: &Ray) -> Option<Hit> {
+        self.trace::<false, _>(ray, &mut ())
+    }
+
+    /// [`Self::closest_hit`], counting the work done into `stats`.
+    pub fn closest_hit_counted(&self, ray: &Ray, stats: &mut KdStats) -> Option<Hit> {
+        self.trace::<false, _>(ray, stats)
+    }
+
+    /// Whether anything is hit on `[tmin, tmax]`; the first hit found ends the search.
+    #[inline]
+    pub fn any_hit(&self, ray: &Ray) -> bool {
+        self.trace::<true, _>(ray, &mut ()).is_some()
+    }
+
+    /// The first hit found on `[tmin, tmax]` (not necessarily the closest), counting the work.
+    pub fn any_hit_counted(&self, ray: &Ray, stats: &mut KdStats) -> Option<Hit> {
+        self.trace::<true, _>(ray, stats)
+    }
+
+    /// The traversal, generic over what it counts and over whether the first hit ends it.
+    #[inline(always)]
+    fn trace<const ANY: bool, C: Counter>(&self, ray: &Ray, counter: &mut C) -> Option<Hit> {
+        if !ray.is_valid() {
+            return None;
+        }
+        let (lo, hi) = self.root?;
+        let o = ray.org.map(f64::from);
+        // `+ 0.0` turns −0 into +0, so a zero component always gives +∞ and "positive" below.
+        let inv = ray.dir.map(|d| 1.0 / (d as f64 + 0.0));
+        // Clip to the (grown) scene box. An axis the ray is parallel to only tests the origin.
+        let mut t0 = ray.tmin as f64;
+        let mut t1 = ray.tmax as f64;
+        for k in 0..3 {
+            if inv[k].is_infinite() {
+                if o[k] < lo[k] || o[k] > hi[k] {
+                    return None;
+                }
+            } else {
+                let a = (lo[k] - o[k]) * inv[k];
+                let b = (hi[k] - o[k]) * inv[k];
+                let (near, far) = if inv[k] < 0.0 { (b, a) } else { (a, b) };
+                t0 = t0.max(near);
+                t1 = t1.min(far);
+            }
+        }
+        // (Neither can be NaN: the bounds are finite and `max`/`min` drop NaN operands.)
+        if t0 > t1 {
+            return None;
+        }
+        counter.ray();
+
+        let tri_ray = TriRay::new(ray);
+        let mut best: Option<Hit> = None;
+        let mut tmax = ray.tmax;
+        let mut stack = [Entry { node: 0, t0: 0.0, t1: 0.0 }; MAX_DEPTH as usize];
+        let mut sp = 0usize;
+        let mut node = 0usize;
+        loop {
+            counter.node();
+            let n = self.nodes[node];
+            if !n.is_leaf() {
+                let k = n.axis();
+                // (s − o)·(1/d): ±∞ when the ray is parallel to the plane, NaN when it also lies
+                // in it. Near is the child the ray enters first.
+                let ts = (n.split() as f64 - o[k]) * inv[k];
+                let first = n.first_child();
+                let (near, far) = if inv[k] < 0.0 { (first + 1, first) } else { (first, first + 1) };
+                if ts > t1 || ts.is_nan() {
+                    // Crosses the plane after the interval (or never, or lies in it: then either
+                    // closed child contains the whole ray and every triangle the ray can hit).
+                    node = near;
+                } else if ts < t0 {
+                    node = far;
+                } else {
+                    stack[sp] = Entry { node: far as u32, t0: ts, t1 };
+                    sp += 1;
+                    node = near;
+                    t1 = ts;
+                }
+                continue;
+            }
+
+            counter.leaf();
+            for &i in &self.references[n.references()] {
+                counter.test();
+                let t = &self.triangles[i as usize];
+                if let Some(h) = tri_ray.intersect(t[0], t[1], t[2], tmax) {
+                    let hit = Hit { t: h.t, prim: self.prims[i as usize], u: h.u, v: h.v };
+                    if ANY {
+                        return Some(hit);
+                    }
+                    tmax = h.t;
+                    best = Some(hit);
+                }
+            }
+            // Final once the best hit lies within the part of the ray already searched.
+            if best.is_some() && tmax as f64 <= t1 {
+                return best;
+            }
+            if sp == 0 {
+                return best;
+            }
+            sp -= 1;
+            let e = stack[sp];
+            node = e.node as usize;
+            t0 = e.t0;
+            t1 = e.t1;
+        }
+    }
+}
+
+impl Intersector for KdTree {
+    #[inline]
+    fn closest_hit(&self, ray: &Ray) -> Option<Hit> {
+        KdTree::closest_hit(self, ray)
+    }
+
+    #[inline]
+    fn any_hit(&self, ray: &Ray) -> bool {
+        KdTree::any_hit(self, ray)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use vlf_geom::BruteForce;
+
+    fn assert_send_sync<T: Send + Sync>() {}
+
+    #[test]
+    fn tree_is_send_and_sync_and_nodes_are_8_bytes() {
+        assert_send_sync::<KdTree>();
+        assert_eq!(size_of::<KdNode>(), 8);
+    }
+
+    #[test]
+    fn node_encoding_round_trips() {
+        let n = KdNode::inner(2, -1.5, 12345);
+        assert!(!n.is_leaf());
+        assert_eq!((n.axis(), n.split(), n.first_child()), (2, -1.5, 12345));
+        let l = KdNode::leaf(MAX_LINK, 7);
+        assert!(l.is_leaf());
+        assert_eq!(l.references(), MAX_LINK as usize..MAX_LINK as usize + 7);
+    }
+
+    #[test]
+    fn empty_tree_misses() {
+        let tree = KdTree::build(&[], KdParams::default());
+        let ray = Ray::new([0.0; 3], [1.0, 0.0, 0.0]);
+        assert_eq!(tree.closest_hit(&ray), None);
+        assert!(!tree.any_hit(&ray));
+        assert_eq!(tree.stats().nodes, 1);
+        assert_eq!(tree.bounds(), None);
+    }
+
+    #[test]
+    fn quad_matches_brute_force_along_its_split_planes() {
+        let q = [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]];
+        let tris = [[q[0], q[1], q[2]], [q[0], q[2], q[3]]];
+        let tree = KdTree::build(&tris, KdParams { max_depth: 8, leaf_size: 1 });
+        let bf = BruteForce { triangles: &tris };
+        for i in 0..=16 {
+            for j in 0..=16 {
+                let (x, y) = (i as f32 / 16.0, j as f32 / 16.0);
+                for ray in [
+                    Ray::new([x, y, 1.0], [0.0, 0.0, -1.0]),
+                    Ray::new([x, y, -1.0], [0.0, -0.0, 2.0]),
+                    Ray::new([x, -1.0, 0.5], [0.0, 1.0, -0.25]),
+                ] {
+                    assert_eq!(tree.closest_hit(&ray).map(|h| h.t), bf.closest_hit(&ray).map(|h| h.t), "{ray:?}");
+                    assert_eq!(tree.any_hit(&ray), bf.any_hit(&ray), "{ray:?}");
+                }
+            }
+        }
+    }
+}
