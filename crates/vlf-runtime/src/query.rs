@@ -231,6 +231,16 @@ impl<'a> FieldView<'a> {
         found
     }
 
+    /// The ray's candidate set (the paper's potentially visible set), leaf by leaf in ray order:
+    /// calls `visit(ids, exit_t)` with each visited leaf's triangle ids and the ray parameter at
+    /// which the ray leaves that leaf, until `visit` returns `true`. A triangle may appear in
+    /// several leaves. This is the walk [`Self::closest_hit`] does, without the triangle tests.
+    pub fn for_each_leaf(&self, ray: &Ray, counter: &mut impl Counter, mut visit: impl FnMut(&[u32], f64) -> bool) {
+        if let Some(setup) = self.setup(ray) {
+            self.walk(&setup, counter, |ids, exit_t, _| if visit(ids, exit_t) { Visit::Done } else { Visit::Continue });
+        }
+    }
+
     /// Steps 3 to 5: visits the leaves along the ray front to back, handing each leaf's ids and
     /// the ray parameter at which the ray leaves that leaf to `visit`, until it says `Done`.
     #[inline(always)]
