@@ -491,8 +491,11 @@ pub fn bake_to_path(
 
     // Directions are baked in parallel, chunk by chunk; a writer thread appends each finished
     // chunk in direction order while the next one is computed. The channel holds at most two
-    // chunks, which bounds memory.
-    let chunk = (rayon::current_num_threads() * 4).max(8);
+    // chunks, and chunks are sized from the bytes the directions baked so far produced (about
+    // CHUNK_BYTES each, at least one direction per thread), which bounds memory whatever the
+    // scene and tile resolution.
+    const CHUNK_BYTES: u64 = 64 << 20;
+    let threads = rayon::current_num_threads().max(1);
     let (send, receive) = std::sync::mpsc::sync_channel::<Vec<DirectionData>>(2);
     progress.begin("baking directions", l as u64);
     let (tiles_w, ids_w, bounds_w) = (&mut tiles_out, &mut ids_out, &mut bounds.writer);
@@ -516,8 +519,10 @@ pub fn bake_to_path(
             Ok((beams, stats))
         });
         let mut baked = Ok(());
-        for chunk_start in (0..l).step_by(chunk) {
+        let (mut chunk_start, mut chunk, mut produced) = (0usize, threads, 0u64);
+        while chunk_start < l {
             let range = chunk_start..(chunk_start + chunk).min(l);
+            chunk_start = range.end;
             let result: Result<Vec<DirectionData>, BakeError> = range
                 .into_par_iter()
                 .map_init(Scratch::default, |s, j| {
@@ -528,8 +533,11 @@ pub fn bake_to_path(
                 .collect();
             match result {
                 // A send fails only if the writer stopped on an error, which join reports below.
-                Ok(chunk) => {
-                    if send.send(chunk).is_err() {
+                Ok(done) => {
+                    produced += done.iter().map(DirectionData::bytes).sum::<u64>();
+                    let per_direction = (produced / chunk_start as u64).max(1);
+                    chunk = ((CHUNK_BYTES / per_direction) as usize).clamp(threads, 64 * threads);
+                    if send.send(done).is_err() {
                         break;
                     }
                 }
