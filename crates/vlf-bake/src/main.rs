@@ -82,7 +82,7 @@ struct BakeArgs {
     #[arg(long, default_value = "4GiB", value_parser = parse_size, value_name = "SIZE")]
     max_bytes: u64,
     /// Automatic parameters aim at no more than this many bytes of field per triangle.
-    #[arg(long, default_value = "64KiB", value_parser = parse_size, value_name = "SIZE")]
+    #[arg(long, default_value = "16KiB", value_parser = parse_size, value_name = "SIZE")]
     max_bytes_per_triangle: u64,
     /// Worker threads (default: RAYON_NUM_THREADS, else all cores). The output does not depend on it.
     #[arg(long, value_name = "T")]

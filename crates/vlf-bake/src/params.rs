@@ -14,10 +14,11 @@ use vlf_geom::Lattice;
 
 /// The default size budget for automatic parameters: 4 GiB.
 pub const DEFAULT_MAX_BYTES: u64 = 4 << 30;
-/// The default per-triangle allowance of automatic parameters: 64 KiB per triangle, so a field
-/// stays proportionate to its scene (a 1K-triangle scene gets tens of MB, not GB). The paper's
-/// fields were 10–25 KB per triangle.
-pub const DEFAULT_MAX_BYTES_PER_TRIANGLE: u64 = 64 << 10;
+/// The default per-triangle allowance of automatic parameters: 16 KiB per triangle, so a field
+/// stays proportionate to its scene (the paper's fields were 10–25 KB per triangle). The parameter
+/// study (`docs/benchmarks/parameters.md`) found that past this size, fields mostly buy
+/// directions, which gain a few percent per fourfold size.
+pub const DEFAULT_MAX_BYTES_PER_TRIANGLE: u64 = 16 << 10;
 /// Default target of triangles per BSP leaf.
 pub const DEFAULT_LEAF_SIZE: u32 = 4;
 /// Default largest BSP depth.
@@ -27,11 +28,13 @@ pub const SPARSE_TILE_LOAD: f64 = 3.0;
 /// Directions baked to estimate a rung's size.
 const SAMPLE_DIRECTIONS: usize = 8;
 
-/// The ladder of automatic (lattice N, tiles n) rungs, coarse to fine. Each step doubles either
-/// the tile resolution or the lattice resolution, keeping `n · worst angle` (the tiles a ray
-/// crosses, `docs/architecture.md`) bounded.
+/// The ladder of automatic (lattice N, tiles n) rungs, coarse to fine. The parameter study on the
+/// 100K scene (`docs/benchmarks/parameters.md`) found frame time driven by the tile resolution
+/// (4.6× from 32² to 128²) and hardly by the directions once `N ≥ n/16` (10% from 129 to 513
+/// directions at 128², 4% from 513 to 2049), so the ladder refines tiles first and adds
+/// directions only to keep a ray's tile crossings (about `1 + 2n/N`) bounded.
 pub const LADDER: [(u32, u32); 9] =
-    [(4, 8), (8, 16), (8, 32), (16, 32), (16, 64), (32, 64), (32, 128), (64, 128), (64, 256)];
+    [(2, 16), (4, 16), (4, 32), (8, 32), (8, 64), (8, 128), (16, 128), (16, 256), (32, 256)];
 
 /// How deep each tile's 1D BSP goes (`formats/vlf.md` §6.3): a tile with `m` triangles gets the
 /// smallest depth `D ≤ max_depth` with `leaf_size · 2^D ≥ m`.
