@@ -51,24 +51,42 @@ pub struct TunedKd {
     pub sweep: Vec<(KdParams, f64)>,
 }
 
-/// The CRT sweep (paper §6.1): depths around the usual `8 + 1.3 log2 N` rule, leaf sizes 1 to 8,
-/// scored by the time of a 128×128 frame from each viewpoint.
+/// The sweep stops deepening a tree once it holds more references than this per triangle:
+/// spatial-median splits duplicate references with depth (for 1M random triangles about 14 per
+/// triangle at depth 20 and 52 at depth 24), so the usual `8 + 1.3 log2 N` rule (34 at 1M) and
+/// beyond would need tens of GB, and trees that large are slower anyway.
+pub const MAX_REFERENCES_PER_TRIANGLE: u64 = 64;
+
+/// The CRT sweep (paper §6.1): for leaf sizes 1, 2, 4 and 8, depths from 6 below the usual
+/// `8 + 1.3 log2 N` rule (at most 18) upwards in steps of 3, deepening while the frame time improves and the
+/// tree stays within [`MAX_REFERENCES_PER_TRIANGLE`]; scored by the time of a 128×128 frame
+/// from each viewpoint.
 pub fn tune_kd(tris: &[[[f32; 3]; 3]], probe: &[Ray], repeats: usize) -> TunedKd {
     let rule = (8.0 + 1.3 * (tris.len().max(2) as f64).log2()).round() as i64;
     let mut sweep = Vec::new();
     let mut best: Option<(f64, KdParams)> = None;
-    for depth in [rule - 6, rule - 3, rule, rule + 3] {
-        for leaf_size in [1, 2, 4, 8] {
-            let params = KdParams { max_depth: depth.clamp(1, 60) as u32, leaf_size };
+    for leaf_size in [1, 2, 4, 8] {
+        let mut previous = f64::INFINITY;
+        let mut depth = (rule - 6).clamp(1, 18);
+        while depth <= 60 {
+            let params = KdParams { max_depth: depth as u32, leaf_size };
             let tree = KdTree::build(tris, params);
+            if tree.stats().references > MAX_REFERENCES_PER_TRIANGLE * tris.len().max(1) as u64 {
+                break;
+            }
             let t = measure(probe, repeats, |r| tree.closest_hit(r)).median_s;
             sweep.push((params, t));
             if best.is_none_or(|(b, _)| t < b) {
                 best = Some((t, params));
             }
+            if t > previous * 1.02 {
+                break;
+            }
+            previous = t;
+            depth += 3;
         }
     }
-    let params = best.expect("a sweep point").1;
+    let params = best.map_or(KdParams::default(), |b| b.1);
     let start = Instant::now();
     let tree = KdTree::build(tris, params);
     let build_s = start.elapsed().as_secs_f64();
@@ -116,6 +134,10 @@ pub struct Fig3Row {
     pub build_or_bake_s: f64,
     pub memory_bytes: u64,
     pub disagreements: usize,
+    /// Ray/triangle tests per ray (the work the structure leaves to the kernel).
+    pub tests_per_ray: f64,
+    /// Field only: tiles visited per ray.
+    pub tiles_per_ray: f64,
 }
 
 fn ms(t: &Timing) -> (f64, Vec<f64>) {
@@ -149,7 +171,8 @@ pub fn figure3(s: &Settings, sizes: &[usize]) -> anyhow::Result<String> {
             let t = measure(rays, s.repeats, |ray| kd.tree.closest_hit(ray));
             let (frame_ms, runs_ms) = ms(&t);
             crt_ms.push(frame_ms);
-            crt_answers.push(rays.iter().map(|ray| kd.tree.closest_hit(ray)).collect::<Vec<_>>());
+            let mut counted = KdStats::default();
+            crt_answers.push(rays.iter().map(|ray| kd.tree.closest_hit_counted(ray, &mut counted)).collect::<Vec<_>>());
             rows.push(Fig3Row {
                 triangles: n,
                 view,
@@ -162,6 +185,8 @@ pub fn figure3(s: &Settings, sizes: &[usize]) -> anyhow::Result<String> {
                 build_or_bake_s: kd.build_s,
                 memory_bytes: kd_stats.bytes,
                 disagreements: 0,
+                tests_per_ray: counted.triangle_tests as f64 / rays.len() as f64,
+                tiles_per_ray: 0.0,
             });
         }
         for kind in FIGURE3_FIELDS {
@@ -184,7 +209,9 @@ pub fn figure3(s: &Settings, sizes: &[usize]) -> anyhow::Result<String> {
             };
             for (i, (view, rays)) in views.iter().enumerate() {
                 let t = measure(rays, s.repeats, |ray| baked.field.closest_hit(ray));
-                let answers: Vec<_> = rays.iter().map(|ray| baked.field.closest_hit(ray)).collect();
+                let mut counted = TraceStats::default();
+                let answers: Vec<_> =
+                    rays.iter().map(|ray| baked.field.view().closest_hit_counted(ray, &mut counted)).collect();
                 let (frame_ms, runs_ms) = ms(&t);
                 rows.push(Fig3Row {
                     triangles: n,
@@ -198,11 +225,20 @@ pub fn figure3(s: &Settings, sizes: &[usize]) -> anyhow::Result<String> {
                     build_or_bake_s: baked.seconds,
                     memory_bytes: baked.bytes,
                     disagreements: disagreements(&answers, &crt_answers[i]),
+                    tests_per_ray: counted.triangle_tests as f64 / rays.len() as f64,
+                    tiles_per_ray: counted.tiles as f64 / rays.len() as f64,
                 });
             }
         }
+        // After every scene, so a long run that is stopped keeps what it measured.
+        render_figure3(s, &rows, &skipped)?;
     }
-    write_output(&s.out, "figure3.json", &serde_json::to_string_pretty(&rows)?)?;
+    render_figure3(s, &rows, &skipped)
+}
+
+/// Writes Figure 3's JSON, plots and table for the rows so far.
+fn render_figure3(s: &Settings, rows: &[Fig3Row], skipped: &[String]) -> anyhow::Result<String> {
+    write_output(&s.out, "figure3.json", &serde_json::to_string_pretty(rows)?)?;
 
     // Plots: one per view, one line per method.
     for view in ["outside", "inside"] {
@@ -236,7 +272,7 @@ pub fn figure3(s: &Settings, sizes: &[usize]) -> anyhow::Result<String> {
         md,
         "The paper's scene (uniformly distributed random triangles, half-extent {DEFAULT_TRIANGLE_SIZE} in a cube of \
          side 2, seed 1), a {0}×{0} frame of unshaded primary rays traced on one thread, median of {1} runs after a \
-         warm-up. CRT is the kd-tree at the best depth and leaf size of a 16-point sweep per scene. Field \
+         warm-up. CRT is the kd-tree at the best depth and leaf size of a sweep per scene (`tune_kd`: leaf sizes 1–8, depths deepened in steps of 3 while it helps). Field \
          directions are chosen by the baker for each tile resolution under a {2} budget. `speedup` is CRT's frame \
          time over the method's. `disagree` counts rays whose closest-hit `t` differs from CRT's bit for bit \
          (both use the same kernel; it must be 0).\n",
@@ -247,13 +283,13 @@ pub fn figure3(s: &Settings, sizes: &[usize]) -> anyhow::Result<String> {
     writeln!(md, "![outside](figure3-outside.svg)\n![inside](figure3-inside.svg)\n")?;
     writeln!(
         md,
-        "| triangles | view | method | parameters | frame ms | Mrays/s | speedup vs CRT | build/bake s | memory MiB | disagree |"
+        "| triangles | view | method | parameters | frame ms | Mrays/s | speedup vs CRT | tests/ray | tiles/ray | build/bake s | memory MiB | disagree |"
     )?;
-    writeln!(md, "| ---: | --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: |")?;
-    for r in &rows {
+    writeln!(md, "| ---: | --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")?;
+    for r in rows {
         writeln!(
             md,
-            "| {} | {} | {} | {} | {:.2} | {:.2} | {:.2} | {:.2} | {:.1} | {} |",
+            "| {} | {} | {} | {} | {:.2} | {:.2} | {:.2} | {:.1} | {:.2} | {:.2} | {:.1} | {} |",
             r.triangles,
             r.view,
             r.method,
@@ -261,6 +297,8 @@ pub fn figure3(s: &Settings, sizes: &[usize]) -> anyhow::Result<String> {
             r.frame_ms,
             r.mrays_per_s,
             r.speedup_vs_crt,
+            r.tests_per_ray,
+            r.tiles_per_ray,
             r.build_or_bake_s,
             r.memory_bytes as f64 / (1 << 20) as f64,
             r.disagreements
@@ -308,8 +346,8 @@ pub struct Fig4Frame {
     pub disagreements: usize,
 }
 
-/// Figure 4: the walkthrough of the `n`-triangle scene (the paper's 16K), field at the baker's
-/// default parameters, CRT tuned.
+/// Figure 4: the walkthrough of the `n`-triangle scene (the paper's 16K): the field at the best
+/// resolution of Figure 3 (BSP tiles, 128², directions chosen under the budget), CRT tuned.
 pub fn figure4(s: &Settings, n: usize, frames: usize) -> anyhow::Result<String> {
     let scene = paper_scene(n);
     let tris = scene.vertices();
@@ -317,7 +355,12 @@ pub fn figure4(s: &Settings, n: usize, frames: usize) -> anyhow::Result<String> 
     let cams = walkthrough(c, r, frames);
     let probe: Vec<Ray> = [0, frames / 2, frames - 1].iter().flat_map(|&i| cams[i].primary_rays(128, 128)).collect();
     let kd = tune_kd(&tris, &probe, s.repeats);
-    let config = BakeConfig { max_bytes: s.max_field_bytes, ..BakeConfig::default() };
+    let config = BakeConfig {
+        tiles: Some(128),
+        max_bytes: s.max_field_bytes,
+        max_bytes_per_triangle: u64::MAX,
+        ..BakeConfig::default()
+    };
     let baked = match bake(&scene, &config, &s.work, "figure4")? {
         Ok(b) => b,
         Err(Skipped::OverBudget(why)) => anyhow::bail!("figure 4 field does not fit: {why}"),
@@ -381,7 +424,7 @@ pub fn figure4(s: &Settings, n: usize, frames: usize) -> anyhow::Result<String> 
         md,
         "{frames} frames of {0}×{0} primary rays along a path from outside the scene (2.5 radii from its centre) \
          to its centre, then a half turn inside. One thread; each frame's time is the median of {1} runs after a \
-         warm-up. Field: the baker's default parameters ({2} directions × {3}² tiles, {4:.0} MiB, baked in {5:.1} s). \
+         warm-up. Field: BSP tiles at Figure 3's best resolution ({2} directions × {3}² tiles, {4:.0} MiB, baked in {5:.1} s). \
          CRT: kd-tree depth {6}, leaf size {7} (best of a sweep), built in {8:.2} s.\n",
         s.resolution,
         s.repeats,
