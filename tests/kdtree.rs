@@ -10,7 +10,7 @@ use std::cell::Cell;
 use vlf_bake::Scene;
 use vlf_bake::generate::{self, Rng};
 use vlf_geom::{BruteForce, Intersector, Ray};
-use vlf_kdtree::{KdParams, KdStats, KdTree};
+use vlf_kdtree::{KdParams, KdTree, TraceStats};
 use vlf_tests::{Tally, assert_exact, compare};
 
 type Tri = [[f32; 3]; 3];
@@ -237,13 +237,13 @@ fn run(label: &str, tris: &[Tri], sets: &[KdParams], per_family: usize, seed: u6
             let tally = compare(&tree, tris, &rays);
             assert_exact(&format!("{label} ({p:?}) / {family}"), &tally);
             total.add(tally);
-            let mut stats = KdStats::default();
+            let mut stats = TraceStats::default();
             for ray in rays.iter().step_by(7) {
                 let counted = tree.closest_hit_counted(ray, &mut stats);
                 assert_eq!(counted, tree.closest_hit(ray), "{ray:?}");
                 assert_eq!(tree.any_hit_counted(ray, &mut stats).is_some(), tree.any_hit(ray), "{ray:?}");
             }
-            assert!(stats.nodes >= stats.leaves && stats.leaves >= stats.rays.min(1), "{stats:?}");
+            assert!(stats.cells >= stats.leaves && stats.leaves >= stats.rays.min(1), "{stats:?}");
         }
     }
     total.rays
@@ -501,7 +501,7 @@ fn counted_queries_count() {
     let tris = generate::random_cube(2000, 0.2, 2);
     let tree = KdTree::build(&tris, params(20, 2));
     let mut rng = Rng::new(77);
-    let mut stats = KdStats::default();
+    let mut stats = TraceStats::default();
     let mut hits = 0;
     for _ in 0..2000 {
         let o = f32s(in_ball(&mut rng, [0.0; 3], 1.0));
@@ -510,7 +510,7 @@ fn counted_queries_count() {
     }
     assert_eq!(stats.rays, 2000);
     assert!(hits > 1000);
-    assert!(stats.leaves >= hits && stats.nodes > stats.leaves && stats.triangle_tests >= hits, "{stats:?}");
+    assert!(stats.leaves >= hits && stats.cells > stats.leaves && stats.triangle_tests >= hits, "{stats:?}");
     let mut twice = stats;
     twice.add(&stats);
     assert_eq!(twice.triangle_tests, 2 * stats.triangle_tests);
@@ -547,7 +547,7 @@ fn queries_do_not_allocate() {
     let rays: Vec<Ray> =
         (0..20_000).map(|_| Ray::new(f32s(in_ball(&mut rng, [0.0; 3], 2.0)), f32s(unit(&mut rng)))).collect();
     let accel: &dyn Intersector = &tree;
-    let mut stats = KdStats::default();
+    let mut stats = TraceStats::default();
     let before = THIS_THREAD_ALLOCS.with(Cell::get);
     let mut hits = 0u64;
     for ray in &rays {

@@ -7,9 +7,9 @@ use std::fmt::Write as _;
 use std::time::Instant;
 use vlf_bake::generate::{DEFAULT_TRIANGLE_SIZE, random_cube};
 use vlf_bake::{BakeConfig, DepthPolicy, Scene};
+use vlf_geom::TraceStats;
 use vlf_geom::{Camera, Ray};
-use vlf_kdtree::{KdParams, KdStats, KdTree};
-use vlf_runtime::TraceStats;
+use vlf_kdtree::{KdParams, KdTree};
 
 /// The paper's scene: `n` random triangles in `[-1, 1]³` (seed 1).
 pub fn paper_scene(n: usize) -> Scene {
@@ -171,7 +171,7 @@ pub fn figure3(s: &Settings, sizes: &[usize]) -> anyhow::Result<String> {
             let t = measure(rays, s.repeats, |ray| kd.tree.closest_hit(ray));
             let (frame_ms, runs_ms) = ms(&t);
             crt_ms.push(frame_ms);
-            let mut counted = KdStats::default();
+            let mut counted = TraceStats::default();
             crt_answers.push(rays.iter().map(|ray| kd.tree.closest_hit_counted(ray, &mut counted)).collect::<Vec<_>>());
             rows.push(Fig3Row {
                 triangles: n,
@@ -226,7 +226,7 @@ pub fn figure3(s: &Settings, sizes: &[usize]) -> anyhow::Result<String> {
                     memory_bytes: baked.bytes,
                     disagreements: disagreements(&answers, &crt_answers[i]),
                     tests_per_ray: counted.triangle_tests as f64 / rays.len() as f64,
-                    tiles_per_ray: counted.tiles as f64 / rays.len() as f64,
+                    tiles_per_ray: counted.cells as f64 / rays.len() as f64,
                 });
             }
         }
@@ -370,7 +370,7 @@ pub fn figure4(s: &Settings, n: usize, frames: usize) -> anyhow::Result<String> 
         let rays = cam.primary_rays(s.resolution, s.resolution);
         let crt = measure(&rays, s.repeats, |ray| kd.tree.closest_hit(ray));
         let field = measure(&rays, s.repeats, |ray| baked.field.closest_hit(ray));
-        let mut kd_stats = KdStats::default();
+        let mut kd_stats = TraceStats::default();
         let mut f_stats = TraceStats::default();
         let kd_answers: Vec<_> = rays.iter().map(|ray| kd.tree.closest_hit_counted(ray, &mut kd_stats)).collect();
         let f_answers: Vec<_> =
@@ -382,7 +382,7 @@ pub fn figure4(s: &Settings, n: usize, frames: usize) -> anyhow::Result<String> 
             field_ms: field.median_s * 1e3,
             crt_tests_per_ray: kd_stats.triangle_tests as f64 / per_ray,
             field_tests_per_ray: f_stats.triangle_tests as f64 / per_ray,
-            field_tiles_per_ray: f_stats.tiles as f64 / per_ray,
+            field_tiles_per_ray: f_stats.cells as f64 / per_ray,
             disagreements: disagreements(&f_answers, &kd_answers),
         });
         if s.verbose && i % 10 == 0 {

@@ -13,7 +13,7 @@ pub mod triangle;
 
 pub use camera::Camera;
 pub use lattice::Lattice;
-pub use ray::{Hit, Intersector, Ray};
+pub use ray::{Counter, Hit, Intersector, Ray, TraceStats};
 pub use triangle::{TriHit, TriRay, is_degenerate};
 
 /// The reference intersector: every triangle, every ray, with the same watertight kernel as the

@@ -67,3 +67,53 @@ pub trait Intersector: Sync {
     /// Whether anything is hit in `[tmin, tmax]` (shadow rays).
     fn any_hit(&self, ray: &Ray) -> bool;
 }
+
+/// Counters of the work traversals did, shared by every acceleration structure so benchmarks
+/// compare like with like: rays that reached the structure, cells visited (tiles for the field,
+/// nodes for the kd-tree), leaves visited and ray/triangle tests (a triangle referenced by several
+/// visited leaves counts each time).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct TraceStats {
+    pub rays: u64,
+    pub cells: u64,
+    pub leaves: u64,
+    pub triangle_tests: u64,
+}
+
+impl TraceStats {
+    pub fn add(&mut self, other: &TraceStats) {
+        self.rays += other.rays;
+        self.cells += other.cells;
+        self.leaves += other.leaves;
+        self.triangle_tests += other.triangle_tests;
+    }
+}
+
+/// What a traversal counts. `()` counts nothing and compiles away.
+pub trait Counter {
+    fn ray(&mut self) {}
+    fn cell(&mut self) {}
+    fn leaf(&mut self) {}
+    fn test(&mut self) {}
+}
+
+impl Counter for () {}
+
+impl Counter for TraceStats {
+    #[inline(always)]
+    fn ray(&mut self) {
+        self.rays += 1;
+    }
+    #[inline(always)]
+    fn cell(&mut self) {
+        self.cells += 1;
+    }
+    #[inline(always)]
+    fn leaf(&mut self) {
+        self.leaves += 1;
+    }
+    #[inline(always)]
+    fn test(&mut self) {
+        self.triangle_tests += 1;
+    }
+}

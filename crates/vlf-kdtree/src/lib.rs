@@ -25,6 +25,7 @@
 
 mod build;
 
+pub use vlf_geom::{Counter, TraceStats};
 use vlf_geom::{Hit, Intersector, Ray, TriRay};
 
 /// The deepest tree the build makes, whatever [`KdParams::max_depth`] asks for; it bounds the
@@ -124,58 +125,6 @@ pub struct KdTreeStats {
     pub bytes: u64,
 }
 
-/// Counters of the work queries did (the paper's Figure 4 counts intersections per frame).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct KdStats {
-    /// Queries that reached the tree (valid rays that meet the scene box).
-    pub rays: u64,
-    /// Nodes visited, inner and leaf.
-    pub nodes: u64,
-    /// Leaves visited.
-    pub leaves: u64,
-    /// Ray/triangle tests (a triangle referenced by several visited leaves counts each time:
-    /// there is no mailboxing, as in CRT).
-    pub triangle_tests: u64,
-}
-
-impl KdStats {
-    pub fn add(&mut self, other: &KdStats) {
-        self.rays += other.rays;
-        self.nodes += other.nodes;
-        self.leaves += other.leaves;
-        self.triangle_tests += other.triangle_tests;
-    }
-}
-
-/// What a traversal counts. `()` counts nothing and compiles away.
-pub trait Counter {
-    fn ray(&mut self) {}
-    fn node(&mut self) {}
-    fn leaf(&mut self) {}
-    fn test(&mut self) {}
-}
-
-impl Counter for () {}
-
-impl Counter for KdStats {
-    #[inline(always)]
-    fn ray(&mut self) {
-        self.rays += 1;
-    }
-    #[inline(always)]
-    fn node(&mut self) {
-        self.nodes += 1;
-    }
-    #[inline(always)]
-    fn leaf(&mut self) {
-        self.leaves += 1;
-    }
-    #[inline(always)]
-    fn test(&mut self) {
-        self.triangle_tests += 1;
-    }
-}
-
 /// A spatial-median kd-tree over a triangle soup. Owns its triangles (reordered by first use in
 /// leaf order, for locality; hits report the input index).
 #[derive(Clone, Debug)]
@@ -270,7 +219,7 @@ impl KdTree {
     }
 
     /// [`Self::closest_hit`], counting the work done into `stats`.
-    pub fn closest_hit_counted(&self, ray: &Ray, stats: &mut KdStats) -> Option<Hit> {
+    pub fn closest_hit_counted(&self, ray: &Ray, stats: &mut TraceStats) -> Option<Hit> {
         self.trace::<false, _>(ray, stats)
     }
 
@@ -281,7 +230,7 @@ impl KdTree {
     }
 
     /// The first hit found on `[tmin, tmax]` (not necessarily the closest), counting the work.
-    pub fn any_hit_counted(&self, ray: &Ray, stats: &mut KdStats) -> Option<Hit> {
+    pub fn any_hit_counted(&self, ray: &Ray, stats: &mut TraceStats) -> Option<Hit> {
         self.trace::<true, _>(ray, stats)
     }
 
@@ -324,7 +273,7 @@ impl KdTree {
         let mut sp = 0usize;
         let mut node = 0usize;
         loop {
-            counter.node();
+            counter.cell();
             let n = self.nodes[node];
             if !n.is_leaf() {
                 let k = n.axis();

@@ -25,9 +25,9 @@ use std::fs::File;
 use std::io::Read;
 use std::path::{Path, PathBuf};
 
-pub use query::{Counter, FieldView, TraceStats};
+pub use query::FieldView;
 pub use vlf_format::{FieldReader, FormatError, hex};
-pub use vlf_geom::{Hit, Intersector, Ray};
+pub use vlf_geom::{Counter, Hit, Intersector, Ray, TraceStats};
 
 /// Why a field could not be opened. Each message is one self-contained line that includes the
 /// underlying cause (so the cause is not repeated as a `source()`).

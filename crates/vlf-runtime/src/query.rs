@@ -21,49 +21,7 @@
 use vlf_format::{BeamRecord, FieldReader, LOOKUP_FLIP, LOOKUP_NONE, MAX_DEPTH, TileRecord, Z_LEVELS};
 use vlf_geom::frame::mul;
 use vlf_geom::lattice::candidates;
-use vlf_geom::{Hit, Ray, TriRay};
-
-/// Counters of the work one query did: the false-colour work images and the benchmarks read them.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct TraceStats {
-    pub rays: u64,
-    pub tiles: u64,
-    pub leaves: u64,
-    pub triangle_tests: u64,
-}
-
-impl TraceStats {
-    pub fn add(&mut self, other: &TraceStats) {
-        self.rays += other.rays;
-        self.tiles += other.tiles;
-        self.leaves += other.leaves;
-        self.triangle_tests += other.triangle_tests;
-    }
-}
-
-/// What a traversal counts. `()` counts nothing and compiles away.
-pub trait Counter {
-    fn tile(&mut self) {}
-    fn leaf(&mut self) {}
-    fn test(&mut self) {}
-}
-
-impl Counter for () {}
-
-impl Counter for TraceStats {
-    #[inline(always)]
-    fn tile(&mut self) {
-        self.tiles += 1;
-    }
-    #[inline(always)]
-    fn leaf(&mut self) {
-        self.leaves += 1;
-    }
-    #[inline(always)]
-    fn test(&mut self) {
-        self.triangle_tests += 1;
-    }
-}
+use vlf_geom::{Counter, Hit, Ray, TriRay};
 
 /// The validated field plus the constants every query needs, derived once at open.
 #[derive(Clone, Copy, Debug)]
@@ -188,6 +146,7 @@ impl<'a> FieldView<'a> {
     /// [`Self::closest_hit`], counting the work done.
     pub fn closest_hit_counted(&self, ray: &Ray, counter: &mut impl Counter) -> Option<Hit> {
         let setup = self.setup(ray)?;
+        counter.ray();
         let tri_ray = TriRay::new(ray);
         let mut best: Option<Hit> = None;
         let mut tmax = ray.tmax;
@@ -215,6 +174,7 @@ impl<'a> FieldView<'a> {
     /// The first hit found on `[tmin, tmax]` (not necessarily the closest), counting the work.
     pub fn any_hit_counted(&self, ray: &Ray, counter: &mut impl Counter) -> Option<Hit> {
         let setup = self.setup(ray)?;
+        counter.ray();
         let tri_ray = TriRay::new(ray);
         let mut found = None;
         self.walk(&setup, counter, |ids, _, counter| {
@@ -273,7 +233,7 @@ impl<'a> FieldView<'a> {
             let t_exit = next_x.min(next_y).min(s.t1);
             let index = tiles_of_dir + iy as usize * self.n + ix as usize;
             if let Some(tile) = self.reader.tiles.get(index) {
-                counter.tile();
+                counter.cell();
                 if let Visit::Done = self.visit_tile(tile, beam, s, t_enter, t_exit, counter, &mut visit) {
                     return;
                 }
