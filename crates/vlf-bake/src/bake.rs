@@ -597,8 +597,22 @@ pub struct AtomicFile {
     path: PathBuf,
 }
 
+/// The file type of an existing path that is not a regular file (a device, FIFO or socket), which
+/// must be written in place, never replaced by a rename.
+fn special_file(path: &Path) -> Option<std::fs::FileType> {
+    std::fs::metadata(path).ok().map(|m| m.file_type()).filter(|t| !t.is_file() && !t.is_dir())
+}
+
 impl AtomicFile {
+    /// Starts writing `path`. Refuses a path that exists and is not a regular file (a device, a
+    /// FIFO): renaming over it would replace the device node, and a field needs positioned writes.
     pub fn create(path: &Path) -> io::Result<AtomicFile> {
+        if special_file(path).is_some() {
+            return Err(io::Error::new(
+                io::ErrorKind::InvalidInput,
+                format!("{} is not a regular file (a device or FIFO); write the field to a file path", path.display()),
+            ));
+        }
         let dir = parent_dir(path);
         let name = path.file_name().map_or("field".into(), |n| n.to_string_lossy().into_owned());
         let prefix = format!(".{name}.");
@@ -625,8 +639,17 @@ impl AtomicFile {
     }
 }
 
-/// Writes a file atomically through a buffered writer (see [`AtomicFile`]).
+/// Writes a file atomically through a buffered writer (see [`AtomicFile`]). A path that exists
+/// and is not a regular file (`/dev/null`, a FIFO, `/dev/stdout`) is written in place instead:
+/// replacing a device node by a rename would break it for every other program.
 pub fn write_atomically<T>(path: &Path, write: impl FnOnce(&mut BufWriter<&File>) -> io::Result<T>) -> io::Result<T> {
+    if special_file(path).is_some() {
+        let file = File::options().write(true).open(path)?;
+        let mut w = BufWriter::with_capacity(1 << 20, &file);
+        let value = write(&mut w)?;
+        w.flush()?;
+        return Ok(value);
+    }
     let tmp = AtomicFile::create(path)?;
     let value = {
         let mut w = BufWriter::with_capacity(1 << 20, tmp.file());

@@ -1012,3 +1012,59 @@ fn output_into_a_closed_pipe_is_success() {
     assert_eq!(std::fs::metadata(&hits).unwrap().len(), 64 * 16);
     Field::open(&box_field).unwrap();
 }
+
+/// Writing to an existing path that is not a regular file (a FIFO here; `/dev/null` in practice)
+/// writes through it and leaves it in place. An atomic rename over it would replace the node: an
+/// earlier version did that to `/dev/null`.
+#[cfg(unix)]
+#[test]
+fn outputs_that_are_fifos_are_written_through_not_replaced() {
+    use std::io::Read;
+    use std::os::unix::fs::FileTypeExt;
+    let dir = tempdir();
+    let field = dir.path().join("box.vlf");
+    assert_eq!(bake(&[&mesh("Box.gltf")], &field, &[]).code, 0);
+    let rays = dir.path().join("rays.bin");
+    assert_eq!(
+        vlf(&[
+            OsStr::new("rays"),
+            field.as_os_str(),
+            OsStr::new("--width"),
+            OsStr::new("8"),
+            OsStr::new("--height"),
+            OsStr::new("4"),
+            OsStr::new("-o"),
+            rays.as_os_str()
+        ])
+        .code,
+        0
+    );
+    let fifo = dir.path().join("hits.fifo");
+    let made = Command::new("mkfifo").arg(&fifo).status().expect("mkfifo runs");
+    assert!(made.success());
+    let reader = {
+        let fifo = fifo.clone();
+        std::thread::spawn(move || {
+            let mut bytes = Vec::new();
+            std::fs::File::open(&fifo).unwrap().read_to_end(&mut bytes).unwrap();
+            bytes.len()
+        })
+    };
+    let traced = vlf(&[
+        OsStr::new("trace"),
+        field.as_os_str(),
+        OsStr::new("--rays"),
+        rays.as_os_str(),
+        OsStr::new("--out"),
+        fifo.as_os_str(),
+    ]);
+    assert_eq!(traced.code, 0, "{}", traced.stderr);
+    // Checked before joining: had the FIFO been replaced, the reader would wait forever.
+    assert!(std::fs::metadata(&fifo).unwrap().file_type().is_fifo(), "the FIFO was replaced");
+    assert_eq!(reader.join().unwrap(), 8 * 4 * 16, "one 16-byte hit record per ray through the FIFO");
+    // A field needs positioned writes: baking into a FIFO is refused, naming the problem.
+    let refused = bake(&[&mesh("Box.gltf")], &fifo, &[]);
+    assert_eq!(refused.code, 1);
+    assert!(refused.stderr.contains("not a regular file"), "{}", refused.stderr);
+    assert!(std::fs::metadata(&fifo).unwrap().file_type().is_fifo());
+}
