@@ -5,8 +5,6 @@
 //! intervals. Plus the structure itself: every triangle is in every leaf it overlaps, the build is
 //! deterministic, queries allocate nothing.
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
 use vlf_bake::Scene;
 use vlf_bake::generate::{self, Rng};
 use vlf_geom::{BruteForce, Intersector, Ray};
@@ -516,28 +514,8 @@ fn counted_queries_count() {
     assert_eq!(twice.triangle_tests, 2 * stats.triangle_tests);
 }
 
-thread_local! {
-    static THIS_THREAD_ALLOCS: Cell<u64> = const { Cell::new(0) };
-}
-
-struct Counting;
-
-// SAFETY: forwards to the system allocator unchanged; only counts calls (per thread, so other
-// tests running in parallel do not interfere).
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        THIS_THREAD_ALLOCS.with(|c| c.set(c.get() + 1));
-        // SAFETY: same contract as our caller's.
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        // SAFETY: same contract as our caller's.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-}
-
 #[global_allocator]
-static GLOBAL: Counting = Counting;
+static GLOBAL: vlf_tests::CountingAllocator = vlf_tests::CountingAllocator;
 
 #[test]
 fn queries_do_not_allocate() {
@@ -548,14 +526,18 @@ fn queries_do_not_allocate() {
         (0..20_000).map(|_| Ray::new(f32s(in_ball(&mut rng, [0.0; 3], 2.0)), f32s(unit(&mut rng)))).collect();
     let accel: &dyn Intersector = &tree;
     let mut stats = TraceStats::default();
-    let before = THIS_THREAD_ALLOCS.with(Cell::get);
+    let before = vlf_tests::allocations_on_this_thread();
     let mut hits = 0u64;
     for ray in &rays {
         hits += accel.closest_hit(ray).is_some() as u64;
         hits += accel.any_hit(ray) as u64;
         hits += tree.closest_hit_counted(ray, &mut stats).is_some() as u64;
     }
-    let after = THIS_THREAD_ALLOCS.with(Cell::get);
+    let after = vlf_tests::allocations_on_this_thread();
     assert!(hits > 0);
     assert_eq!(after - before, 0, "queries allocated");
+    // The counter is live: a real allocation on this thread is seen (so zero above means zero).
+    let probe: Vec<u64> = std::hint::black_box(Vec::with_capacity(16));
+    assert!(vlf_tests::allocations_on_this_thread() > after, "the counting allocator is not installed");
+    drop(probe);
 }

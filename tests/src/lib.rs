@@ -354,3 +354,32 @@ pub fn check_field(label: &str, field: &Field, tris: &[[[f32; 3]; 3]], per_famil
     }
     total
 }
+
+/// A global allocator that forwards to the system allocator and counts allocations per thread, so
+/// a test can show a stretch of its own code allocates nothing while other tests run in parallel.
+/// Install it in a test binary with
+/// `#[global_allocator] static GLOBAL: vlf_tests::CountingAllocator = vlf_tests::CountingAllocator;`
+/// and read [`allocations_on_this_thread`] before and after.
+pub struct CountingAllocator;
+
+thread_local! {
+    static THIS_THREAD_ALLOCS: std::cell::Cell<u64> = const { std::cell::Cell::new(0) };
+}
+
+/// Allocations made so far on the calling thread (through [`CountingAllocator`]).
+pub fn allocations_on_this_thread() -> u64 {
+    THIS_THREAD_ALLOCS.with(std::cell::Cell::get)
+}
+
+// SAFETY: forwards every call to the system allocator unchanged; it only counts them.
+unsafe impl std::alloc::GlobalAlloc for CountingAllocator {
+    unsafe fn alloc(&self, layout: std::alloc::Layout) -> *mut u8 {
+        THIS_THREAD_ALLOCS.with(|c| c.set(c.get() + 1));
+        // SAFETY: same contract as our caller's.
+        unsafe { std::alloc::System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: std::alloc::Layout) {
+        // SAFETY: same contract as our caller's.
+        unsafe { std::alloc::System.dealloc(ptr, layout) }
+    }
+}
