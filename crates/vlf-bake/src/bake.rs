@@ -675,7 +675,7 @@ impl AtomicFile {
         let tmp = builder.tempfile_in(parent_dir(path))?;
         // Marks the file as being written for as long as this process lives. Where the file
         // system has no locks, nothing is marked, and no leftover is ever removed as stale.
-        let _ = tmp.as_file().try_lock();
+        try_lock(tmp.as_file());
         Ok(AtomicFile { tmp, path: path.to_path_buf() })
     }
 
@@ -719,6 +719,21 @@ pub fn remove_stale_temp_files(path: &Path) -> usize {
     removed
 }
 
+/// Takes an exclusive advisory lock (`flock`) on `file` without waiting, held until every handle
+/// of this open file is closed (or the process dies). False if another holds it, or the platform or
+/// file system has no such locks.
+fn try_lock(file: &File) -> bool {
+    #[cfg(unix)]
+    {
+        rustix::fs::flock(file, rustix::fs::FlockOperation::NonBlockingLockExclusive).is_ok()
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = file;
+        false
+    }
+}
+
 /// Removes `candidate` if it is a regular file, old enough, and unlocked (its writer is gone).
 fn remove_if_stale(candidate: &Path) -> io::Result<bool> {
     let meta = std::fs::symlink_metadata(candidate)?;
@@ -726,7 +741,7 @@ fn remove_if_stale(candidate: &Path) -> io::Result<bool> {
         return Ok(false);
     }
     let file = File::open(candidate)?;
-    if file.try_lock().is_err() {
+    if !try_lock(&file) {
         return Ok(false);
     }
     // The name still leads to the file we locked (nobody replaced it in between).
