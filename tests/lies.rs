@@ -85,10 +85,13 @@ fn aligned(bytes: &[u8]) -> Vec<u64> {
     words
 }
 
+/// Bytes to write at offsets.
+type Edits = Vec<(usize, Vec<u8>)>;
+
 /// One lie: byte edits, and the direction it is confined to (if it is).
 struct Lie {
     what: &'static str,
-    edits: Vec<(usize, Vec<u8>)>,
+    edits: Edits,
     direction: Option<usize>,
 }
 
@@ -125,7 +128,7 @@ fn candidates(field: &Field, ray: &Ray) -> Vec<u32> {
     out
 }
 
-fn put<T: bytemuck::Pod>(edits: &mut Vec<(usize, Vec<u8>)>, at: usize, value: T) {
+fn put<T: bytemuck::Pod>(edits: &mut Edits, at: usize, value: T) {
     edits.push((at, bytemuck::bytes_of(&value).to_vec()));
 }
 
@@ -175,7 +178,7 @@ fn targeted_lies_deep_inside_sections() {
 
     let lies = {
         let mut lies = Vec::new();
-        let mut lie = |what, direction: Option<usize>, edit: &dyn Fn(&mut Vec<(usize, Vec<u8>)>)| {
+        let mut lie = |what, direction: Option<usize>, edit: &dyn Fn(&mut Edits)| {
             let mut edits = Vec::new();
             edit(&mut edits);
             lies.push(Lie { what, edits, direction });
