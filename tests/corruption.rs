@@ -1,9 +1,18 @@
-//! Damaged files give errors, never panics: every truncation, a flipped byte anywhere, foreign
-//! files. A flipped byte in the header or table is caught at open (content hash); anywhere else
-//! by the full verification (`dump --verify`).
+//! Damaged files give errors, never panics, and each error names what is wrong:
+//!
+//! - every truncation is refused at open as a truncation;
+//! - a flipped bit anywhere in the header or the section table is refused at open, by the header
+//!   field it damaged (magic, version, sizes, length, reserved fields) or by the content hash
+//!   (the hashes and the table, which the content hash covers);
+//! - a flipped bit anywhere in the payload is caught by the full verification that
+//!   `vlf-bake dump --verify` runs (`vlf_bake::inspect::verify`), by the section it damaged (that
+//!   section's hash) or by the padding byte's offset; SCENE and PARAMS values that the open
+//!   checks are caught at open already.
+//!
+//! The real command line on a sample of these is tested in `crates/vlf-bake/tests/reliability.rs`.
 
 use vlf_bake::{DepthPolicy, Scene, generate};
-use vlf_format::FormatError;
+use vlf_format::{FormatError, HEADER_SIZE, SectionKind, TABLE_ENTRY_SIZE, kind_name};
 use vlf_runtime::{Field, OpenError};
 
 /// A complete, tiny field (a 12-triangle box, 3 directions, 2×2 tiles): a few KiB.
@@ -13,47 +22,153 @@ fn tiny_field() -> Vec<u8> {
     std::fs::read(dir.path().join("scene.vlf")).unwrap()
 }
 
-/// Opens and fully verifies bytes (aligned copy, as `Field::from_bytes` does).
+/// Opens and fully verifies bytes (aligned copy, as `Field::from_bytes` does): what
+/// `vlf-bake dump --verify` does with a file.
 fn open_and_verify(bytes: &[u8]) -> Result<(), String> {
     let field = Field::from_bytes(bytes).map_err(|e| e.to_string())?;
     vlf_bake::inspect::verify(field.reader(), &mut |_, _| {}).map(|_| ()).map_err(|e| e.to_string())
+}
+
+/// The format error behind an open error.
+fn format_error(e: OpenError) -> FormatError {
+    match e {
+        OpenError::Bytes(e) | OpenError::Format { error: e, .. } => e,
+        OpenError::Io { .. } => panic!("bytes cannot give an I/O error: {e}"),
+    }
+}
+
+/// The end of the section table: where the payload starts.
+fn table_end(bytes: &[u8]) -> usize {
+    HEADER_SIZE + TABLE_ENTRY_SIZE * u32::from_le_bytes(bytes[32..36].try_into().unwrap()) as usize
 }
 
 #[test]
 fn the_tiny_field_verifies() {
     let bytes = tiny_field();
     open_and_verify(&bytes).unwrap();
-    assert!(bytes.len() < 8192, "the sweep below is quadratic; keep the fixture tiny ({} bytes)", bytes.len());
+    assert!(bytes.len() < 8192, "the sweeps below flip every bit; keep the fixture tiny ({} bytes)", bytes.len());
 }
 
 #[test]
-fn every_truncation_is_refused_at_open() {
+fn every_truncation_is_refused_at_open_as_a_truncation() {
     let bytes = tiny_field();
     for len in 0..bytes.len() {
-        match Field::from_bytes(&bytes[..len]) {
-            Err(OpenError::Bytes(FormatError::TooShort { .. } | FormatError::LengthMismatch { .. })) => {}
-            Err(other) => panic!("truncated to {len}: unexpected error {other}"),
-            Ok(_) => panic!("truncated to {len} bytes but opened"),
+        let err =
+            Field::from_bytes(&bytes[..len]).err().unwrap_or_else(|| panic!("truncated to {len} bytes but opened"));
+        let message = err.to_string();
+        match format_error(err) {
+            FormatError::TooShort { .. } | FormatError::LengthMismatch { .. } => {}
+            other => panic!("truncated to {len}: unexpected error {other}"),
+        }
+        assert!(message.contains("truncated"), "truncated to {len}: the message does not say so: {message}");
+    }
+}
+
+/// Whether `e` is the error a flipped bit at header offset `at` must give, and its message names
+/// what is wrong.
+fn names_the_damage(at: usize, e: &FormatError) -> bool {
+    let m = e.to_string();
+    let field =
+        |name: &str| matches!(e, FormatError::BadHeaderField { field, .. } if *field == name) && m.contains(name);
+    let reserved =
+        |name: &str| matches!(e, FormatError::ReservedNotZero { field } if *field == name) && m.contains(name);
+    let hash = matches!(e, FormatError::ContentHashMismatch { .. }) && m.contains("header or section table is corrupt");
+    match at {
+        0..8 => matches!(e, FormatError::BadMagic { .. }) && m.contains("bad magic"),
+        8..10 => matches!(e, FormatError::UnsupportedVersion { .. }) && m.contains("format version"),
+        // Any minor version is read; the content hash covers it.
+        10..12 => hash,
+        12..16 => field("header_size"),
+        16..24 => {
+            matches!(e, FormatError::LengthMismatch { .. }) && (m.contains("truncated") || m.contains("appended"))
+        }
+        24..32 => field("table_offset"),
+        // A larger count runs past the limit or the file, a smaller one hashes a shorter table.
+        32..36 => {
+            (matches!(e, FormatError::TooManySections { .. } | FormatError::TableOutOfBounds { .. })
+                && m.contains("section table"))
+                || hash
+        }
+        36..40 => field("table_entry_size"),
+        40..44 => reserved("flags"),
+        44..48 => reserved("reserved0"),
+        // The content hash itself, the input hash.
+        48..112 => hash,
+        112..128 => reserved("reserved1"),
+        // The section table.
+        _ => hash,
+    }
+}
+
+#[test]
+fn a_flipped_bit_in_the_header_or_table_is_refused_at_open_naming_what_is_wrong() {
+    let bytes = tiny_field();
+    for at in 0..table_end(&bytes) {
+        for bit in 0..8 {
+            let mut damaged = bytes.clone();
+            damaged[at] ^= 1 << bit;
+            let err = Field::from_bytes(&damaged)
+                .err()
+                .unwrap_or_else(|| panic!("bit {bit} of byte {at} flipped but opened"));
+            let e = format_error(err);
+            assert!(names_the_damage(at, &e), "bit {bit} of byte {at}: wrong or vague error: {e}");
         }
     }
 }
 
 #[test]
-fn a_flipped_byte_anywhere_is_caught() {
+fn a_flipped_bit_anywhere_in_the_payload_fails_verification_naming_the_section() {
     let bytes = tiny_field();
-    let table_end = 128 + 72 * u32::from_le_bytes(bytes[32..36].try_into().unwrap()) as usize;
-    for offset in 0..bytes.len() {
-        for mask in [0x01u8, 0x80, 0xff] {
+    let table = {
+        let field = Field::from_bytes(&bytes).unwrap();
+        field.reader().table.to_vec()
+    };
+    let mut sections_hit = std::collections::BTreeSet::new();
+    let mut padding_hit = 0;
+    for at in table_end(&bytes)..bytes.len() {
+        let section = table.iter().find(|e| (e.offset..e.offset + e.stored_length).contains(&(at as u64)));
+        for bit in 0..8 {
             let mut damaged = bytes.clone();
-            damaged[offset] ^= mask;
-            let opened = Field::from_bytes(&damaged);
-            if offset < table_end {
-                assert!(opened.is_err(), "flip at {offset} (header/table) was not caught at open");
+            damaged[at] ^= 1 << bit;
+            let what = format!("bit {bit} of byte {at} ({})", section.map_or("padding".into(), |e| kind_name(e.kind)));
+            let field = match Field::from_bytes(&damaged) {
+                Ok(field) => field,
+                // SCENE and PARAMS values that later size computations rely on are checked at
+                // open, by name or by the section whose size they no longer match.
+                Err(err) => {
+                    let kind = section.map(|e| e.kind);
+                    assert!(
+                        kind == Some(SectionKind::Scene as u32) || kind == Some(SectionKind::Params as u32),
+                        "{what}: refused at open, but the open checks do not read that byte: {err}"
+                    );
+                    let e = format_error(err);
+                    assert!(
+                        matches!(&e, FormatError::Invalid { section: "SCENE" | "PARAMS", .. })
+                            || matches!(e, FormatError::WrongElementCount { .. }),
+                        "{what}: {e}"
+                    );
+                    continue;
+                }
+            };
+            let e = vlf_bake::inspect::verify(field.reader(), &mut |_, _| {})
+                .err()
+                .unwrap_or_else(|| panic!("{what}: not caught by the full verification"));
+            match (section, &e) {
+                (Some(entry), FormatError::SectionHashMismatch { kind, .. }) if *kind == kind_name(entry.kind) => {
+                    assert!(e.to_string().contains(&format!("section {kind} is corrupt")), "{e}");
+                    sections_hit.insert(kind.clone());
+                }
+                (None, FormatError::NonZeroPadding { offset, .. }) if *offset == at as u64 => {
+                    assert!(e.to_string().contains(&format!("padding byte at offset {at}")), "{e}");
+                    padding_hit += 1;
+                }
+                _ => panic!("{what}: the error does not name the damaged section or byte: {e}"),
             }
-            let result = open_and_verify(&damaged);
-            assert!(result.is_err(), "flip {mask:#04x} at offset {offset} was not caught");
         }
     }
+    // Every section was swept, and the padding too.
+    assert_eq!(sections_hit.len(), table.len(), "{sections_hit:?}");
+    assert!(padding_hit > 0);
 }
 
 #[test]

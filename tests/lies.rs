@@ -1,12 +1,19 @@
 //! A field that passes the open checks but lies inside a section (the open checks cover the header
 //! and table only; payload hashes are checked by `dump --verify`). Queries on it must never panic
-//! or read out of bounds; they may return wrong answers. Every payload section is overwritten with
-//! random bytes, all-zero and all-one bytes in turn, and a frame of rays is traced.
+//! or read out of bounds; they may return wrong answers, of a kind `docs/reliability.md` states:
+//!
+//! - [`queries_on_a_lying_field_never_panic`]: every payload section overwritten with zeros, ones,
+//!   sparse and dense random bytes in turn, and a frame of rays traced;
+//! - [`targeted_lies_deep_inside_sections`]: one value at a time made out of range (or wrong but in
+//!   range) deep inside a section: a triangle id, a leaf bound, a tile record, a direction's BEAMS
+//!   record, its rotation, its LOOKUP entry, the scene's radius, a triangle's vertices. Each answer
+//!   must be *sound* (a hit is a real hit on a stored triangle, never closer than the true closest;
+//!   an any-hit is a real hit) and each lie confined to the rays that use the lied-about direction.
 
 use vlf_bake::generate::Rng;
 use vlf_bake::{DepthPolicy, Scene, generate};
-use vlf_format::{FieldReader, SectionKind};
-use vlf_geom::{Camera, Ray};
+use vlf_format::{BeamRecord, FieldReader, LOOKUP_FLIP, LOOKUP_NONE, SectionKind, TileRecord};
+use vlf_geom::{BruteForce, Camera, Hit, Intersector, Ray, TriRay};
 use vlf_runtime::Field;
 
 #[test]
@@ -76,4 +83,206 @@ fn aligned(bytes: &[u8]) -> Vec<u64> {
     let mut words = vec![0u64; bytes.len().div_ceil(8)];
     bytemuck::cast_slice_mut::<u64, u8>(&mut words)[..bytes.len()].copy_from_slice(bytes);
     words
+}
+
+/// Bytes to write at offsets.
+type Edits = Vec<(usize, Vec<u8>)>;
+
+/// One lie: byte edits, and the direction it is confined to (if it is).
+struct Lie {
+    what: &'static str,
+    edits: Edits,
+    direction: Option<usize>,
+}
+
+/// Checks that `got` (closest hit) and `any` (any-hit) of a field whose stored triangles are
+/// `tris` are sound for `ray`: a hit is the kernel's own hit on the stored triangle it names, and no
+/// closer than the brute-force closest hit over all stored triangles; an any-hit is a real hit.
+fn assert_sound(what: &str, tris: &[[[f32; 3]; 3]], ray: &Ray, got: Option<Hit>, any: Option<Hit>) {
+    let truth = BruteForce { triangles: tris }.closest_hit(ray);
+    for (kind, hit) in [("closest", got), ("any", any)] {
+        let Some(h) = hit else { continue };
+        let tri = tris
+            .get(h.prim as usize)
+            .unwrap_or_else(|| panic!("{what}: {kind} hit on triangle {} of {}", h.prim, tris.len()));
+        let own = TriRay::new(ray).intersect(tri[0], tri[1], tri[2], ray.tmax);
+        assert_eq!(
+            own.map(|o| o.t.to_bits()),
+            Some(h.t.to_bits()),
+            "{what}: {kind} hit {h:?} is not a hit on its triangle for {ray:?}"
+        );
+        let best = truth.unwrap_or_else(|| panic!("{what}: {kind} hit {h:?} where brute force finds none, {ray:?}"));
+        if kind == "closest" {
+            assert!(h.t >= best.t, "{what}: closest hit {h:?} is closer than the true closest {best:?}, {ray:?}");
+        }
+    }
+}
+
+/// The ids of every leaf a ray visits, in order: the candidate set the query tests.
+fn candidates(field: &Field, ray: &Ray) -> Vec<u32> {
+    let mut out = Vec::new();
+    field.view().for_each_leaf(ray, &mut (), |ids, _| {
+        out.extend_from_slice(ids);
+        false
+    });
+    out
+}
+
+fn put<T: bytemuck::Pod>(edits: &mut Edits, at: usize, value: T) {
+    edits.push((at, bytemuck::bytes_of(&value).to_vec()));
+}
+
+#[test]
+fn targeted_lies_deep_inside_sections() {
+    let scene = Scene::from_triangles("random", &generate::random_cube(400, 0.1, 4)).unwrap();
+    let (dir, honest) = vlf_tests::bake(&scene, 33, 16, DepthPolicy { leaf_size: 2, max_depth: 6 });
+    let bytes = std::fs::read(dir.path().join("scene.vlf")).unwrap();
+    let r = honest.reader();
+    let offset = |kind: SectionKind| r.entry(kind).unwrap().offset as usize;
+    let (l, n) = (r.directions.len(), r.params.tile_resolution as usize);
+    let t_count = r.triangles.len() as u32;
+
+    // A direction near the end of the file's sections and its fullest tile: values deep inside
+    // BEAMS, TILES, LEAF_BOUNDS and TRIANGLE_IDS, far from where each section starts.
+    let j = l - 2;
+    let beam: BeamRecord = r.beams[j];
+    let tiles = &r.tiles[j * n * n..(j + 1) * n * n];
+    let leaves = |t: &TileRecord| {
+        let first = (beam.leaf_base + t.first_leaf as u64) as usize;
+        (first, first + (1usize << t.depth))
+    };
+    let ids_in = |t: &TileRecord| {
+        let (a, b) = leaves(t);
+        r.leaf_bounds[b] - r.leaf_bounds[a]
+    };
+    let tile_index = (0..n * n).max_by_key(|&i| ids_in(&tiles[i])).unwrap();
+    let tile = tiles[tile_index];
+    assert!(tile.depth > 0 && ids_in(&tile) > 4, "the test needs a deep, full tile");
+    let (first_leaf, _) = leaves(&tile);
+    // The tile's first non-empty leaf, its first id, and the byte offsets of all three records.
+    let k = (first_leaf..).find(|&k| r.leaf_bounds[k + 1] > r.leaf_bounds[k]).unwrap();
+    let id_index = (beam.id_base + r.leaf_bounds[k] as u64) as usize;
+    let tile_at = offset(SectionKind::Tiles) + (j * n * n + tile_index) * size_of::<TileRecord>();
+    let bound_at = offset(SectionKind::LeafBounds) + 4 * k;
+    let id_at = offset(SectionKind::TriangleIds) + 4 * id_index;
+    let beam_at = offset(SectionKind::Beams) + j * size_of::<BeamRecord>();
+    let rotation_at = offset(SectionKind::Rotations) + j * 72;
+    let lookup_index = r.lookup.iter().position(|&e| e != LOOKUP_NONE && (e & !LOOKUP_FLIP) as usize == j).unwrap();
+    let lookup_at = offset(SectionKind::Lookup) + 4 * lookup_index;
+    let victim = r.triangle_ids[id_index];
+    for (what, at) in [("TILES", tile_at), ("LEAF_BOUNDS", bound_at), ("TRIANGLE_IDS", id_at), ("BEAMS", beam_at)] {
+        let e =
+            r.table.iter().find(|e| (e.offset as usize..(e.offset + e.stored_length) as usize).contains(&at)).unwrap();
+        assert!(at - e.offset as usize > e.stored_length as usize / 2, "{what}: the lie at {at} is not deep inside");
+    }
+
+    let lies = {
+        let mut lies = Vec::new();
+        let mut lie = |what, direction: Option<usize>, edit: &dyn Fn(&mut Edits)| {
+            let mut edits = Vec::new();
+            edit(&mut edits);
+            lies.push(Lie { what, edits, direction });
+        };
+        let d = Some(j);
+        lie("a triangle id equal to triangle_count", d, &|e| put(e, id_at, t_count));
+        lie("a triangle id of u32::MAX", d, &|e| put(e, id_at, u32::MAX));
+        lie("a wrong triangle id in range", d, &|e| put(e, id_at, (victim + 1) % t_count));
+        lie("a leaf bound past the end of TRIANGLE_IDS", d, &|e| put(e, bound_at + 4, u32::MAX));
+        lie("leaf bounds that decrease", d, &|e| put(e, bound_at, r.leaf_bounds[k + 1] + 1));
+        lie("a tile's first_leaf of u32::MAX", d, &|e| put(e, tile_at, u32::MAX));
+        lie("a tile's depth above the format's limit", d, &|e| put(e, tile_at + 8, 200u8));
+        lie("a tile's depth at the format's limit (2^24 leaves)", d, &|e| put(e, tile_at + 8, 24u8));
+        lie("a tile's z range inverted", d, &|e| put(e, tile_at + 4, [tile.z_hi, tile.z_lo]));
+        lie("a tile's z range shrunk to one level", d, &|e| put(e, tile_at + 6, tile.z_lo + 1));
+        lie("BEAMS leaf_base of u64::MAX", d, &|e| put(e, beam_at, u64::MAX));
+        lie("BEAMS id_base of u64::MAX", d, &|e| put(e, beam_at + 16, u64::MAX));
+        lie("BEAMS bases pointing at the previous direction", d, &|e| {
+            put(e, beam_at, r.beams[j - 1].leaf_base);
+            put(e, beam_at + 16, r.beams[j - 1].id_base);
+        });
+        lie("a rotation of NaNs", d, &|e| put(e, rotation_at, [f64::NAN; 9]));
+        lie("a rotation of zeros", d, &|e| put(e, rotation_at, [0.0f64; 9]));
+        lie("a rotation turned upside down", d, &|e| {
+            let m = r.rotations[j];
+            put(e, rotation_at, [m[0], m[1], m[2], -m[3], -m[4], -m[5], -m[6], -m[7], -m[8]]);
+        });
+        lie("a direction of NaNs", None, &|e| {
+            put(e, offset(SectionKind::Directions) + 16 * j, [f32::NAN, f32::NAN, f32::NAN, 0.0])
+        });
+        lie("a LOOKUP entry one past the last direction", None, &|e| put(e, lookup_at, l as u32));
+        lie("a LOOKUP entry of 2^31 - 1", None, &|e| put(e, lookup_at, LOOKUP_FLIP - 1));
+        lie("a LOOKUP entry erased", None, &|e| put(e, lookup_at, LOOKUP_NONE));
+        lie("the scene's radius halved", None, &|e| put(e, offset(SectionKind::Scene) + 24, r.scene.radius / 2.0));
+        lie("a triangle's vertices of NaNs", None, &|e| {
+            put(e, offset(SectionKind::Triangles) + 48 * victim as usize, [f32::NAN; 12])
+        });
+        lie("a triangle moved far away", None, &|e| {
+            put(e, offset(SectionKind::Triangles) + 48 * victim as usize, [1e6f32; 12])
+        });
+        lies
+    };
+
+    // Rays along direction j through the damaged tile (exactly parallel, and tilted within the
+    // tile), both ways, then rays in every direction.
+    let (c, radius) = honest.bounding_sphere();
+    let m = r.rotations[j];
+    let w = 2.0 * radius / n as f64;
+    let (s, t) = ((tile_index % n) as f64, (tile_index / n) as f64);
+    let mut rng = Rng::new(7);
+    let mut rays = Vec::new();
+    for i in 0..64 {
+        let p = [-radius + (s + rng.range(0.05, 0.95)) * w, -radius + (t + rng.range(0.05, 0.95)) * w, -1.5 * radius];
+        let world: [f64; 3] = std::array::from_fn(|a| c[a] + m[a] * p[0] + m[3 + a] * p[1] + m[6 + a] * p[2]);
+        let tilt = if i % 2 == 0 { 0.0 } else { rng.range(-0.2, 0.2) * w / radius };
+        let d = [m[6] + tilt * m[0], m[7] + tilt * m[1], m[8] + tilt * m[2]];
+        let ray = Ray::new(world.map(|v| v as f32), d.map(|v| v as f32));
+        // The same line travelled the other way, from beyond the scene.
+        let far: [f64; 3] = std::array::from_fn(|a| world[a] + 3.0 * radius * d[a]);
+        rays.push(ray);
+        rays.push(Ray::new(far.map(|v| v as f32), d.map(|v| -v as f32)));
+    }
+    let targeted = rays.len();
+    assert!(rays.iter().all(|ray| honest.view().select_direction(ray.dir.map(f64::from)).unwrap().0 == j));
+    rays.extend(Camera::outside(c, radius, 1.0).primary_rays(32, 32));
+    rays.extend(Camera::inside(c, radius, 1.0).primary_rays(32, 32));
+
+    let mut lying = bytes.clone();
+    for lie in &lies {
+        let started = std::time::Instant::now();
+        lying.copy_from_slice(&bytes);
+        for (at, value) in &lie.edits {
+            lying[*at..*at + value.len()].copy_from_slice(value);
+        }
+        let field = Field::from_bytes(&lying).unwrap_or_else(|e| panic!("{}: the lie does not open: {e}", lie.what));
+        let tris: Vec<[[f32; 3]; 3]> =
+            field.reader().triangles.iter().map(|t| [t.vertex(0), t.vertex(1), t.vertex(2)]).collect();
+        let mut touched = 0;
+        for (i, ray) in rays.iter().enumerate() {
+            let got = field.closest_hit(ray);
+            let any = field.view().any_hit_counted(ray, &mut ());
+            assert_eq!(field.any_hit(ray), any.is_some(), "{}", lie.what);
+            assert_sound(lie.what, &tris, ray, got, any);
+            let seen = candidates(&field, ray);
+            let confined =
+                lie.direction.is_some_and(|d| honest.view().select_direction(ray.dir.map(f64::from)).unwrap().0 != d);
+            if confined {
+                assert_eq!(seen, candidates(&honest, ray), "{}: a ray of another direction sees the lie", lie.what);
+                assert_eq!(
+                    got,
+                    honest.closest_hit(ray),
+                    "{}: a ray of another direction answers differently",
+                    lie.what
+                );
+            }
+            if i < targeted && (seen != candidates(&honest, ray) || got != honest.closest_hit(ray)) {
+                touched += 1;
+            }
+        }
+        assert!(touched > 0, "{}: no targeted ray reaches the lie", lie.what);
+        println!(
+            "{}: {touched} of {targeted} targeted rays see a different candidate set or answer ({:?})",
+            lie.what,
+            started.elapsed()
+        );
+    }
 }

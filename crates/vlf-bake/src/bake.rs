@@ -16,7 +16,7 @@ use rayon::prelude::*;
 use std::fs::File;
 use std::io::{self, BufWriter, Seek, Write};
 use std::path::{Path, PathBuf};
-use std::time::Instant;
+use std::time::{Duration, Instant};
 use vlf_format::{
     BeamRecord, FieldFile, HashingWriter, ParamsRecord, Request, SceneRecord, SectionKind, StatisticsRecord,
     TileRecord, VERSION_MAJOR, Z_LEVELS,
@@ -43,6 +43,12 @@ pub enum BakeError {
         "direction {direction} needs {count} {what}, more than the format's 2^32 - 1 per direction; lower --tiles or the scene size"
     )]
     DirectionTooLarge { direction: usize, count: u64, what: &'static str },
+    /// Explicit parameters produced more bytes than `--max-bytes` allows; the bake stopped as soon
+    /// as it knew, and removed what it had written.
+    #[error(
+        "the field outgrew the --max-bytes ceiling of {ceiling} bytes ({at_least} bytes or more after {baked} of {directions} directions); lower --directions or --tiles, or raise --max-bytes"
+    )]
+    OverBudget { ceiling: u64, at_least: u64, baked: usize, directions: usize },
 }
 
 /// Progress callbacks; the CLI draws a bar, tests pass [`NoProgress`].
@@ -468,7 +474,7 @@ pub fn bake_to_path(
     let tmp = AtomicFile::create(output).map_err(io_err)?;
     let mut f = FieldFile::create(tmp.file().try_clone().map_err(io_err)?, SectionKind::ALL.len()).map_err(io_err)?;
     let [tri_bytes, prov_bytes, src_bytes, input_bytes, string_bytes] = scene_sections(scene);
-    for (kind, bytes) in [
+    let small_sections = [
         (SectionKind::Scene, bytemuck::bytes_of(&scene_record)),
         (SectionKind::Params, bytemuck::bytes_of(&params_record)),
         (SectionKind::Directions, bytemuck::cast_slice(&dir_records)),
@@ -479,9 +485,20 @@ pub fn bake_to_path(
         (SectionKind::Sources, src_bytes),
         (SectionKind::Inputs, input_bytes),
         (SectionKind::Strings, string_bytes),
-    ] {
+    ];
+    for (kind, bytes) in small_sections {
         f.append(kind, bytes).map_err(io_err)?;
     }
+    // Explicit parameters are held to --max-bytes as a ceiling (automatic ones were chosen to fit
+    // it by estimate): the bake stops as soon as the bytes it must write exceed it. `fixed` counts
+    // every section whose size is known now, without padding, so the running check never fires
+    // early; the exact length is checked once the file is complete.
+    let ceiling = if choice.automatic { u64::MAX } else { request.max_bytes };
+    let fixed = (vlf_format::HEADER_SIZE + vlf_format::TABLE_ENTRY_SIZE * SectionKind::ALL.len()) as u64
+        + small_sections.iter().map(|(_, b)| b.len() as u64).sum::<u64>()
+        + l as u64 * (size_of::<BeamRecord>() as u64 + n2 * size_of::<TileRecord>() as u64)
+        + size_of::<StatisticsRecord>() as u64;
+    let over_budget = |at_least: u64, baked: usize| BakeError::OverBudget { ceiling, at_least, baked, directions: l };
     let mut beams_out = f.reserve(SectionKind::Beams, l as u64 * size_of::<BeamRecord>() as u64).map_err(io_err)?;
     let mut stats_out = f.reserve(SectionKind::Statistics, size_of::<StatisticsRecord>() as u64).map_err(io_err)?;
     let mut tiles_out =
@@ -500,15 +517,19 @@ pub fn bake_to_path(
     progress.begin("baking directions", l as u64);
     let (tiles_w, ids_w, bounds_w) = (&mut tiles_out, &mut ids_out, &mut bounds.writer);
     let (written, baked) = std::thread::scope(|scope| {
-        let writer = scope.spawn(move || -> io::Result<(Vec<BeamRecord>, StatisticsRecord)> {
+        let writer = scope.spawn(move || -> Result<(Vec<BeamRecord>, StatisticsRecord), BakeError> {
             let mut beams = Vec::with_capacity(l);
             let mut stats = StatisticsRecord::zeroed_record();
             let (mut leaf_base, mut id_base) = (0u64, 0u64);
             for chunk in receive {
                 for d in chunk {
-                    tiles_w.write_all(bytemuck::cast_slice(&d.tiles))?;
-                    ids_w.write_all(bytemuck::cast_slice(&d.ids))?;
-                    bounds_w.write_all(bytemuck::cast_slice(&d.bounds))?;
+                    let at_least = fixed + 4 * (leaf_base + id_base + (d.bounds.len() + d.ids.len()) as u64);
+                    if at_least > ceiling {
+                        return Err(over_budget(at_least, beams.len() + 1));
+                    }
+                    tiles_w.write_all(bytemuck::cast_slice(&d.tiles)).map_err(io_err)?;
+                    ids_w.write_all(bytemuck::cast_slice(&d.ids)).map_err(io_err)?;
+                    bounds_w.write_all(bytemuck::cast_slice(&d.bounds)).map_err(io_err)?;
                     let leaf_count = d.bounds.len() as u64 - 1;
                     beams.push(BeamRecord { leaf_base, leaf_count, id_base, id_count: d.ids.len() as u64 });
                     leaf_base += leaf_count + 1;
@@ -553,7 +574,7 @@ pub fn bake_to_path(
     });
     progress.end();
     baked?;
-    let (beams, stats) = written.map_err(io_err)?;
+    let (beams, stats) = written?;
 
     progress.begin("writing", 1);
     f.finish_section(tiles_out).map_err(io_err)?;
@@ -565,6 +586,9 @@ pub fn bake_to_path(
     stats_out.write_all(bytemuck::bytes_of(&stats)).map_err(io_err)?;
     f.finish_section(stats_out).map_err(io_err)?;
     let (_, header) = f.finish(hash).map_err(io_err)?;
+    if header.file_length > ceiling {
+        return Err(over_budget(header.file_length, l));
+    }
     tmp.commit().map_err(io_err)?;
     progress.end();
 
@@ -588,14 +612,28 @@ pub fn bake_to_path(
     })
 }
 
-/// A file being written next to its final path: a temporary file in the same directory, renamed
-/// over the path by [`AtomicFile::commit`] after it is flushed and synced. Dropped without a
-/// commit (an error, a panic), it is removed; a crash leaves the path untouched (and at worst a
-/// `.NAME.*.tmp` file beside it).
+/// A file being written next to its final path: a temporary file `.NAME.XXXXXX.tmp` in the same
+/// directory (`XXXXXX` six random letters and digits), renamed over the path by
+/// [`AtomicFile::commit`] after it is flushed and synced, after which the directory is synced too.
+/// Dropped without a commit (an error, a panic), it is removed.
+///
+/// A process killed while writing (`SIGKILL`, a crash, a power cut) leaves the path untouched and
+/// the temporary file beside it. The writer holds an exclusive advisory lock (`flock`) on its
+/// temporary file, which the kernel releases when the process dies, so a later write of the same
+/// path can tell a leftover from a file being written: [`remove_stale_temp_files`] removes the
+/// leftovers that nobody holds locked and that are older than [`STALE_TEMP_AGE`].
 pub struct AtomicFile {
     tmp: tempfile::NamedTempFile,
     path: PathBuf,
 }
+
+/// How old an unlocked temporary file must be before a later write of the same path removes it.
+/// The lock decides; the age only covers the instant between a writer creating its temporary
+/// file and locking it.
+pub const STALE_TEMP_AGE: Duration = Duration::from_secs(60);
+
+/// Length of the random part of a temporary file's name.
+const TEMP_RANDOM_LEN: usize = 6;
 
 /// The file type of an existing path that is not a regular file (a device, FIFO or socket), which
 /// must be written in place, never replaced by a rename.
@@ -603,9 +641,17 @@ fn special_file(path: &Path) -> Option<std::fs::FileType> {
     std::fs::metadata(path).ok().map(|m| m.file_type()).filter(|t| !t.is_file() && !t.is_dir())
 }
 
+/// The prefix of the temporary files that write `path`: `.NAME.`.
+fn temp_prefix(path: &Path) -> String {
+    let name = path.file_name().map_or("field".into(), |n| n.to_string_lossy().into_owned());
+    format!(".{name}.")
+}
+
 impl AtomicFile {
-    /// Starts writing `path`. Refuses a path that exists and is not a regular file (a device, a
-    /// FIFO): renaming over it would replace the device node, and a field needs positioned writes.
+    /// Starts writing `path`, first removing stale temporary files that killed writers of the same
+    /// path left behind. Refuses a path that exists and is not a regular file: a directory, or a
+    /// device or FIFO (renaming over it would replace the device node, and a field needs
+    /// positioned writes).
     pub fn create(path: &Path) -> io::Result<AtomicFile> {
         if special_file(path).is_some() {
             return Err(io::Error::new(
@@ -613,15 +659,24 @@ impl AtomicFile {
                 format!("{} is not a regular file (a device or FIFO); write the field to a file path", path.display()),
             ));
         }
-        let dir = parent_dir(path);
-        let name = path.file_name().map_or("field".into(), |n| n.to_string_lossy().into_owned());
-        let prefix = format!(".{name}.");
+        if path.is_dir() {
+            return Err(io::Error::new(
+                io::ErrorKind::IsADirectory,
+                "the path is a directory; give the path of a file, such as DIR/scene.vlf",
+            ));
+        }
+        remove_stale_temp_files(path);
+        let prefix = temp_prefix(path);
         let mut builder = tempfile::Builder::new();
-        builder.prefix(&prefix).suffix(".tmp");
+        builder.prefix(&prefix).suffix(".tmp").rand_bytes(TEMP_RANDOM_LEN);
         // A new file's usual permissions (0666 less the umask), not tempfile's private 0600.
         #[cfg(unix)]
         builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
-        Ok(AtomicFile { tmp: builder.tempfile_in(dir)?, path: path.to_path_buf() })
+        let tmp = builder.tempfile_in(parent_dir(path))?;
+        // Marks the file as being written for as long as this process lives. Where the file
+        // system has no locks, nothing is marked, and no leftover is ever removed as stale.
+        try_lock(tmp.as_file());
+        Ok(AtomicFile { tmp, path: path.to_path_buf() })
     }
 
     pub fn file(&self) -> &File {
@@ -632,11 +687,74 @@ impl AtomicFile {
     pub fn commit(self) -> io::Result<()> {
         self.tmp.as_file().sync_all()?;
         self.tmp.persist(&self.path).map_err(|e| e.error)?;
+        // Makes the rename durable. Some file systems refuse to sync a directory; the rename has
+        // happened either way.
         if let Ok(d) = File::open(parent_dir(&self.path)) {
             let _ = d.sync_all();
         }
         Ok(())
     }
+}
+
+/// Removes the temporary files (`.NAME.XXXXXX.tmp`, see [`AtomicFile`]) that writers of `path`
+/// killed before they could clean up left in its directory: regular files that no process holds
+/// locked and that were last modified at least [`STALE_TEMP_AGE`] ago. Returns how many it removed.
+/// Never fails: a file it cannot inspect, lock or remove is left alone.
+pub fn remove_stale_temp_files(path: &Path) -> usize {
+    let prefix = temp_prefix(path);
+    let Ok(entries) = std::fs::read_dir(parent_dir(path)) else { return 0 };
+    let mut removed = 0;
+    for entry in entries.flatten() {
+        let name = entry.file_name();
+        let Some(random) = name.to_str().and_then(|n| n.strip_prefix(&prefix)?.strip_suffix(".tmp")) else {
+            continue;
+        };
+        if random.len() == TEMP_RANDOM_LEN
+            && random.bytes().all(|b| b.is_ascii_alphanumeric())
+            && remove_if_stale(&entry.path()).unwrap_or(false)
+        {
+            removed += 1;
+        }
+    }
+    removed
+}
+
+/// Takes an exclusive advisory lock (`flock`) on `file` without waiting, held until every handle
+/// of this open file is closed (or the process dies). False if another holds it, or the platform or
+/// file system has no such locks.
+fn try_lock(file: &File) -> bool {
+    #[cfg(unix)]
+    {
+        rustix::fs::flock(file, rustix::fs::FlockOperation::NonBlockingLockExclusive).is_ok()
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = file;
+        false
+    }
+}
+
+/// Removes `candidate` if it is a regular file, old enough, and unlocked (its writer is gone).
+fn remove_if_stale(candidate: &Path) -> io::Result<bool> {
+    let meta = std::fs::symlink_metadata(candidate)?;
+    if !meta.file_type().is_file() || meta.modified()?.elapsed().unwrap_or_default() < STALE_TEMP_AGE {
+        return Ok(false);
+    }
+    let file = File::open(candidate)?;
+    if !try_lock(&file) {
+        return Ok(false);
+    }
+    // The name still leads to the file we locked (nobody replaced it in between).
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        let (now, held) = (std::fs::symlink_metadata(candidate)?, file.metadata()?);
+        if (now.dev(), now.ino()) != (held.dev(), held.ino()) {
+            return Ok(false);
+        }
+    }
+    std::fs::remove_file(candidate)?;
+    Ok(true)
 }
 
 /// Writes a file atomically through a buffered writer (see [`AtomicFile`]). A path that exists

@@ -78,7 +78,8 @@ struct BakeArgs {
     /// BSP depth policy: largest depth of a tile's 1D BSP (0 = linear tiles, no BSP).
     #[arg(long, default_value_t = DEFAULT_MAX_DEPTH, value_name = "D")]
     max_depth: u32,
-    /// Size budget for automatic parameters, and a ceiling for explicit ones (e.g. 4GiB, 512MiB, 1e9).
+    /// Size budget for automatic parameters, and a ceiling for explicit ones: a bake with explicit
+    /// parameters stops, leaving nothing behind, as soon as its field would exceed it (e.g. 4GiB, 512MiB, 1e9).
     #[arg(long, default_value = "4GiB", value_parser = parse_size, value_name = "SIZE")]
     max_bytes: u64,
     /// Automatic parameters aim at no more than this many bytes of field per triangle.

@@ -19,6 +19,8 @@ pub const MAX_COORDINATE: f32 = 1.0e18;
 pub enum ImportError {
     #[error("cannot read {path}: {error}")]
     Io { path: PathBuf, error: std::io::Error },
+    #[error("{path} is empty (0 bytes): there is no mesh to bake")]
+    Empty { path: PathBuf },
     #[error("{path}: unknown mesh format (expected .obj, .gltf or .glb)")]
     UnknownFormat { path: PathBuf },
     #[error("{path}: not a valid OBJ file: {message}")]
@@ -35,8 +37,9 @@ pub enum ImportError {
     IndexOutOfRange { path: PathBuf, location: String, index: u64, count: u64 },
     #[error("{path}: {location} requires the unsupported extension {extension}")]
     UnsupportedExtension { path: PathBuf, location: String, extension: String },
-    #[error("{what} contains no triangles to bake")]
-    NoTriangles { what: String },
+    /// `detail` says why, when it is known: ": all 3 of its triangles have zero area".
+    #[error("{what} contains no triangles to bake{detail}")]
+    NoTriangles { what: String, detail: String },
     #[error("the scene has more than {max} triangles, the format's limit")]
     TooManyTriangles { max: u64 },
 }
@@ -210,7 +213,7 @@ impl SceneBuilder {
                 [one] => one.display().to_string(),
                 _ => "the inputs".to_string(),
             };
-            return Err(ImportError::NoTriangles { what });
+            return Err(ImportError::NoTriangles { what, detail: String::new() });
         }
         Ok(self.scene)
     }

@@ -230,7 +230,12 @@ fn obj_quads_ngons_groups_and_materials() {
     // Object: quad (2) + pentagon (3). Group: hexagon (4) + zero-area (dropped) + relative (1).
     assert_eq!(scene.len(), 10);
     assert_eq!(scene.report.dropped_degenerate, 1);
-    assert!(scene.report.warnings.is_empty(), "{:?}", scene.report.warnings);
+    assert_eq!(scene.report.warnings.len(), 1, "{:?}", scene.report.warnings);
+    assert!(
+        scene.report.warnings[0].ends_with("groups.obj: dropped 1 degenerate (zero-area) triangle"),
+        "{}",
+        scene.report.warnings[0]
+    );
     assert_eq!(scene.sources.len(), 2);
     assert_eq!(source_name(&scene, 0), "quads_and_pentagon");
     assert_eq!(source_name(&scene, 1), "hexagon_group");
@@ -397,9 +402,13 @@ fn obj_face_index_out_of_range() {
 
 #[test]
 fn obj_without_triangles() {
-    for name in ["bad/empty.obj", "bad/only_vertices.obj"] {
+    for name in ["bad/only_vertices.obj", "bad/all_degenerate.obj"] {
         let e = import_err(name);
         assert!(matches!(e, ImportError::NoTriangles { .. }), "{name}: {e:?}");
+    }
+    for name in ["bad/empty.obj", "bad/empty.gltf", "bad/empty.glb"] {
+        let e = import_err(name);
+        assert!(matches!(e, ImportError::Empty { .. }), "{name}: {e:?}");
     }
 }
 

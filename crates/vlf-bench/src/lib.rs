@@ -128,7 +128,11 @@ pub fn bake(scene: &Scene, config: &BakeConfig, work: &Path, name: &str) -> anyh
         Err(vlf_bake::BakeError::Params(why)) => return Ok(Err(Skipped::OverBudget(why))),
         Err(e) => return Err(e.into()),
     };
-    let summary = vlf_bake::bake::bake_to_path(&prep, &choice, &config.request(), &path, &NoProgress)?;
+    let summary = match vlf_bake::bake::bake_to_path(&prep, &choice, &config.request(), &path, &NoProgress) {
+        Ok(s) => s,
+        Err(e @ vlf_bake::BakeError::OverBudget { .. }) => return Ok(Err(Skipped::OverBudget(e.to_string()))),
+        Err(e) => return Err(e.into()),
+    };
     let seconds = start.elapsed().as_secs_f64();
     let field = Field::open(&path)?;
     Ok(Ok(Baked {

@@ -272,6 +272,15 @@ impl<'a> FieldView<'a> {
         if tile.is_empty() || tile.depth as u32 > MAX_DEPTH {
             return Visit::Continue;
         }
+        let count = 1i64 << tile.depth;
+        // File-supplied bases: saturate, so an absurd value fails the bounds check instead of
+        // overflowing. An honest tile's leaves lie inside LEAF_BOUNDS (`formats/vlf.md` §5.6);
+        // skipping a tile that claims more keeps a lying depth from making the loop below
+        // iterate up to 2^24 times over leaves that do not exist.
+        let base = (beam.leaf_base as usize).saturating_add(tile.first_leaf as usize);
+        if base.saturating_add(count as usize) >= self.reader.leaf_bounds.len() {
+            return Visit::Continue;
+        }
         let z0 = -self.radius + tile.z_lo as f64 * self.z_step;
         let z1 = -self.radius + tile.z_hi as f64 * self.z_step;
         let (oz, dz) = (s.o[2], s.d[2]);
@@ -282,14 +291,10 @@ impl<'a> FieldView<'a> {
         if !(lo <= hi) {
             return Visit::Continue;
         }
-        let count = 1i64 << tile.depth;
         let h = (z1 - z0) / count as f64;
         let leaf_of = |t: f64| (((oz + t * dz - z0) / h) as i64).clamp(0, count - 1);
         let (first, last) = (leaf_of(lo), leaf_of(hi));
         let step = if dz > 0.0 { 1 } else { -1 };
-        // File-supplied bases: saturate, so an absurd value fails the bounds check instead of
-        // overflowing.
-        let base = (beam.leaf_base as usize).saturating_add(tile.first_leaf as usize);
         let mut k = first;
         loop {
             let leaf_exit = if k == last {

@@ -63,6 +63,7 @@ impl Ctx<'_> {
 /// Imports the glTF or GLB file `bytes` (read from `path`) as input `input`.
 pub(super) fn import(builder: &mut SceneBuilder, input: u32, path: &Path, bytes: &[u8]) -> Result<(), ImportError> {
     let ctx = Ctx { path, input };
+    check_container(&ctx, bytes)?;
 
     // The raw JSON, for what the typed document drops (extensions on primitives and buffer views).
     let json: Cow<[u8]> = if bytes.starts_with(b"glTF") {
@@ -140,6 +141,50 @@ pub(super) fn import(builder: &mut SceneBuilder, input: u32, path: &Path, bytes:
     let unused = mesh_used.iter().filter(|&&u| !u).count();
     if unused > 0 {
         ctx.warn(builder, format!("{unused} mesh(es) are not instanced by any node of the imported scene"));
+    }
+    Ok(())
+}
+
+/// Says what is wrong with a file that is neither glTF JSON nor a whole GLB container, before a
+/// parser reports a JSON syntax error or a short read: no `{` and no `glTF` magic (naming what the
+/// bytes look like instead), a GLB version other than 2, a GLB shorter than its header says.
+fn check_container(ctx: &Ctx, bytes: &[u8]) -> Result<(), ImportError> {
+    const GLB_HEADER: usize = 12;
+    if !bytes.starts_with(b"glTF") {
+        let text = bytes.strip_prefix(b"\xEF\xBB\xBF".as_slice()).unwrap_or(bytes);
+        if text.iter().find(|b| !b.is_ascii_whitespace()) == Some(&b'{') {
+            return Ok(());
+        }
+        let looks_like = if super::obj::looks_like_obj(text) {
+            " (it looks like OBJ text: give it the .obj extension)"
+        } else if bytes.starts_with(&vlf_format::MAGIC) {
+            " (it is a VLF field, not a mesh)"
+        } else {
+            ""
+        };
+        let glb = ctx.path.extension().is_some_and(|e| e.eq_ignore_ascii_case("glb"));
+        return Err(ctx.err(if glb {
+            format!("not a GLB file: it does not start with the GLB magic \"glTF\"{looks_like}")
+        } else {
+            format!(
+                "neither glTF JSON nor GLB: the file starts with neither '{{' nor the GLB magic \"glTF\"{looks_like}"
+            )
+        }));
+    }
+    let word = |at: usize| bytes.get(at..at + 4).map(|w| u32::from_le_bytes([w[0], w[1], w[2], w[3]]));
+    let (Some(version), Some(length)) = (word(4), word(8)) else {
+        return Err(
+            ctx.err(format!("truncated GLB: {} bytes, shorter than the {GLB_HEADER}-byte GLB header", bytes.len()))
+        );
+    };
+    if version != 2 {
+        return Err(ctx.err(format!("GLB version {version} is not supported (glTF 2.0 files are GLB version 2)")));
+    }
+    if length as usize > bytes.len() {
+        return Err(ctx.err(format!(
+            "truncated GLB: its header gives its length as {length} bytes, but the file has {}",
+            bytes.len()
+        )));
     }
     Ok(())
 }
@@ -523,8 +568,13 @@ fn mul(a: &Mat4, b: &Mat4) -> Mat4 {
     std::array::from_fn(|column| std::array::from_fn(|row| (0..4).map(|k| a[k][row] * b[column][k]).sum()))
 }
 
-/// The affine image of `p` under `m`, computed in f64 and rounded to f32.
+/// The affine image of `p` under `m`, computed in f64 and rounded to f32. A point with a
+/// non-finite coordinate is returned as it is, so that the error names the value in the file (a
+/// NaN would otherwise spread to every coordinate).
 fn transform_point(m: &Mat4, p: [f32; 3]) -> [f32; 3] {
+    if !p.iter().all(|c| c.is_finite()) {
+        return p;
+    }
     let [x, y, z] = p.map(f64::from);
     std::array::from_fn(|row| (m[0][row] * x + m[1][row] * y + m[2][row] * z + m[3][row]) as f32)
 }

@@ -25,20 +25,47 @@ pub fn import_paths(paths: &[impl AsRef<Path>]) -> Result<Scene, ImportError> {
 /// for an unknown extension sniffs the bytes ("glTF" magic, '{' JSON, OBJ-looking text) before
 /// giving [`ImportError::UnknownFormat`].
 ///
-/// A file that contributes no triangle (empty, vertices without faces, only points or lines, only
-/// zero-area triangles) is an error, [`ImportError::NoTriangles`], even when other inputs have
-/// triangles: it is almost certainly not what the caller meant to bake.
+/// An empty file is [`ImportError::Empty`]. A file that contributes no triangle (vertices without
+/// faces, only points or lines, only zero-area triangles) is an error,
+/// [`ImportError::NoTriangles`] saying which, even when other inputs have triangles: it is almost
+/// certainly not what the caller meant to bake. Zero-area triangles dropped from a file that has
+/// others are counted, with a warning naming the file.
 pub fn import_path(builder: &mut SceneBuilder, path: &Path) -> Result<(), ImportError> {
     let bytes = std::fs::read(path).map_err(|error| ImportError::Io { path: path.to_path_buf(), error })?;
+    if bytes.is_empty() {
+        return Err(ImportError::Empty { path: path.to_path_buf() });
+    }
     let format = detect_format(path, &bytes).ok_or_else(|| ImportError::UnknownFormat { path: path.to_path_buf() })?;
     let before = builder.triangle_count();
+    let report = builder.report_mut();
+    let (dropped, points, lines) = (report.dropped_degenerate, report.skipped_points, report.skipped_lines);
     let input = builder.begin_input(&path.to_string_lossy(), *blake3::hash(&bytes).as_bytes());
     match format {
         Format::Obj => obj::import(builder, input, path, &bytes)?,
         Format::Gltf => gltf::import(builder, input, path, &bytes)?,
     }
+    let report = builder.report_mut();
+    let dropped = report.dropped_degenerate - dropped;
+    let (points, lines) = (report.skipped_points - points, report.skipped_lines - lines);
     if builder.triangle_count() == before {
-        return Err(ImportError::NoTriangles { what: path.display().to_string() });
+        let detail = if dropped > 0 {
+            format!(": all {dropped} of its triangles have zero area")
+        } else if points + lines > 0 {
+            format!(": it holds only points and lines ({points} point and {lines} line primitives skipped)")
+        } else {
+            match format {
+                Format::Obj => ": it has no face with three or more vertices".to_string(),
+                Format::Gltf => ": no node of its scene instances a triangle mesh".to_string(),
+            }
+        };
+        return Err(ImportError::NoTriangles { what: path.display().to_string(), detail });
+    }
+    if dropped > 0 {
+        let s = if dropped == 1 { "" } else { "s" };
+        builder
+            .report_mut()
+            .warnings
+            .push(format!("{}: dropped {dropped} degenerate (zero-area) triangle{s}", path.display()));
     }
     Ok(())
 }

@@ -28,10 +28,19 @@ const KEYWORDS: &[&str] = &[
 /// Imports the OBJ text `bytes` (read from `path`) as input `input`.
 pub(super) fn import(builder: &mut SceneBuilder, input: u32, path: &Path, bytes: &[u8]) -> Result<(), ImportError> {
     let err = |message: String| ImportError::Obj { path: path.to_path_buf(), message };
+    if bytes.starts_with(b"glTF") {
+        return Err(err("this is a binary glTF (GLB) file, not OBJ text: give it the .glb extension".to_string()));
+    }
+    if bytes.starts_with(&vlf_format::MAGIC) {
+        return Err(err("this is a VLF field, not a mesh".to_string()));
+    }
     let text = std::str::from_utf8(bytes).map_err(|e| {
         let line = 1 + bytes[..e.valid_up_to()].iter().filter(|&&b| b == b'\n').count();
         err(format!("not UTF-8 text (invalid byte on line {line}); is this an OBJ file?"))
     })?;
+    if text.trim_start_matches('\u{feff}').trim_start().starts_with('{') {
+        return Err(err("this looks like glTF JSON, not OBJ text: give it the .gltf extension".to_string()));
+    }
     let scan = scan(path, text)?;
 
     // tobj reads `l` statements as faces (a three-point polyline would become a triangle): blank
