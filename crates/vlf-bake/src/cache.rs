@@ -120,9 +120,12 @@ pub struct EntryInfo {
     pub bytes: u64,
     /// Seconds since the entry was stored or last hit.
     pub age_seconds: f64,
-    /// What the field's header and small sections say, or why they could not be read.
+    /// What the field's header and small sections say, if they pass the open checks.
     #[serde(flatten)]
-    pub field: Result<FieldInfo, String>,
+    pub field: Option<FieldInfo>,
+    /// Why the entry cannot be opened as a field.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub problem: Option<String>,
 }
 
 /// The field behind an entry.
@@ -267,13 +270,17 @@ impl Cache {
             };
             let age = meta.modified().ok().and_then(|m| now.duration_since(m).ok()).unwrap_or_default();
             let path = item.path();
-            let field = Field::open(&path).map_err(|e| e.to_string()).map(|f| describe(f.reader()));
+            let (field, problem) = match Field::open(&path) {
+                Ok(f) => (Some(describe(f.reader())), None),
+                Err(e) => (None, Some(e.to_string())),
+            };
             entries.push(EntryInfo {
                 key: key.to_string(),
                 path,
                 bytes: meta.len(),
                 age_seconds: age.as_secs_f64(),
                 field,
+                problem,
             });
         }
         entries.sort_by(|a, b| a.age_seconds.total_cmp(&b.age_seconds).then_with(|| a.key.cmp(&b.key)));

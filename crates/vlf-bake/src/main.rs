@@ -516,8 +516,8 @@ fn cache(a: &CacheArgs) -> Result<()> {
             let total: u64 = entries.iter().map(|e| e.bytes).sum();
             let mut text = format!("{} entries, {} in {}", entries.len(), human_bytes(total), dir.display());
             for e in &entries {
-                let what = match &e.field {
-                    Ok(f) => format!(
+                let what = match (&e.field, &e.problem) {
+                    (Some(f), _) => format!(
                         "{} triangles, {} directions × {}² tiles, format {}, from {}",
                         f.triangles,
                         f.directions,
@@ -525,7 +525,7 @@ fn cache(a: &CacheArgs) -> Result<()> {
                         f.format_version,
                         f.inputs.join(", ")
                     ),
-                    Err(problem) => format!("unreadable: {problem}"),
+                    (None, problem) => format!("unusable: {}", problem.as_deref().unwrap_or("unknown")),
                 };
                 text.push_str(&format!(
                     "\n  {}  {:>10}  used {} ago  {what}",
