@@ -518,3 +518,143 @@ fn the_report_describes_the_bake() {
         assert!(report["peak_memory"]["bytes"].as_u64().unwrap() > 1 << 20, "{report}");
     }
 }
+
+const DOCS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../docs/");
+
+/// The shell scripts of a YAML recipe: every literal block introduced by `run: |` (GitHub
+/// Actions) or `- |` (a Kubernetes container's `args`), without its indentation.
+fn shell_blocks(yaml: &str) -> Vec<String> {
+    let lines: Vec<&str> = yaml.lines().collect();
+    let indent = |l: &str| l.len() - l.trim_start().len();
+    let mut blocks = Vec::new();
+    for (i, line) in lines.iter().enumerate() {
+        let t = line.trim();
+        if !(t.ends_with("run: |") || t == "- |") {
+            continue;
+        }
+        let body: Vec<&str> =
+            lines[i + 1..].iter().take_while(|l| l.trim().is_empty() || indent(l) > indent(line)).copied().collect();
+        let strip = body.iter().filter(|l| !l.trim().is_empty()).map(|l| indent(l)).min().unwrap_or(0);
+        blocks.push(body.iter().map(|l| l.get(strip..).unwrap_or("")).collect::<Vec<_>>().join("\n"));
+    }
+    blocks
+}
+
+/// Runs `shell -c script` (or `shell script` for a file) in `dir` with `env`, `vlf-bake` on the
+/// PATH, and asserts success.
+fn run_shell(shell: &str, script: &str, is_file: bool, dir: &Path, env: &[(&str, String)]) {
+    std::fs::create_dir_all(dir).unwrap();
+    let bin_dir = Path::new(BIN).parent().unwrap();
+    let path = std::env::join_paths(
+        std::iter::once(bin_dir.to_path_buf())
+            .chain(std::env::split_paths(&std::env::var_os("PATH").unwrap_or_default())),
+    )
+    .unwrap();
+    let mut cmd = Command::new(shell);
+    if is_file {
+        cmd.arg(script)
+    } else {
+        cmd.arg("-c").arg(script)
+    };
+    cmd.current_dir(dir).env("PATH", path).env_remove("VLF_CACHE_DIR").env_remove("RAYON_NUM_THREADS");
+    for (k, v) in env {
+        cmd.env(k, v);
+    }
+    let out = cmd.stdin(Stdio::null()).output().unwrap();
+    let what = format!("{shell} in {} with {env:?}: {script}", dir.display());
+    Run::from_output(what, out).ok();
+}
+
+/// The recipes of `docs/build-farms.md` are the files in `docs/farm/`, verbatim, and their shell
+/// parts, run on this machine with the variables the schedulers would set, merge into the field a
+/// single bake writes.
+#[test]
+fn the_build_farm_recipes_run_locally() {
+    let doc = std::fs::read_to_string(Path::new(DOCS).join("build-farms.md")).unwrap();
+    let farm = Path::new(DOCS).join("farm");
+    let read = |name: &str| std::fs::read_to_string(farm.join(name)).unwrap();
+    for name in [
+        "github-actions.yml",
+        "slurm/bake-shard.sbatch",
+        "slurm/merge.sbatch",
+        "slurm/submit.sh",
+        "kubernetes/shards-job.yaml",
+        "kubernetes/merge-job.yaml",
+        "Dockerfile",
+    ] {
+        assert!(doc.contains(read(name).trim_end()), "docs/build-farms.md does not quote docs/farm/{name} verbatim");
+    }
+
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let scene = s(&mesh("bunny_scene.glb")).to_string();
+    let bake_args = "--directions 33 --tiles 16".to_string();
+    let single = d.join("single.vlf");
+    vlf(&["bake", &scene, "-o", s(&single), "--quiet", "--directions", "33", "--tiles", "16"]).ok();
+    let expected = std::fs::read(&single).unwrap();
+    let same = |field: &Path, recipe: &str| {
+        assert!(std::fs::read(field).unwrap() == expected, "the {recipe} recipe's field differs from a single bake");
+    };
+
+    // GitHub Actions: each matrix job on its own runner, artifacts carried to the merge runner.
+    let gh = read("github-actions.yml");
+    assert!(gh.contains("shard: [0, 1, 2, 3]") && gh.contains("SHARDS: 4"), "the matrix and SHARDS disagree");
+    let blocks = shell_blocks(&gh);
+    assert_eq!(blocks.len(), 2, "a bake step and a merge step: {blocks:?}");
+    let merge_runner = d.join("gh/merge");
+    std::fs::create_dir_all(merge_runner.join("farm")).unwrap();
+    for k in 0..4 {
+        let runner = d.join(format!("gh/shard-{k}"));
+        let env = [
+            ("SCENE", scene.clone()),
+            ("BAKE_ARGS", bake_args.clone()),
+            ("SHARDS", "4".into()),
+            ("SHARD", k.to_string()),
+        ];
+        run_shell("bash", &format!("set -eo pipefail\n{}", blocks[0]), false, &runner, &env);
+        for f in std::fs::read_dir(runner.join("farm")).unwrap() {
+            let f = f.unwrap();
+            std::fs::copy(f.path(), merge_runner.join("farm").join(f.file_name())).unwrap();
+        }
+    }
+    run_shell("bash", &format!("set -eo pipefail\n{}", blocks[1]), false, &merge_runner, &[]);
+    same(&merge_runner.join("scene.vlf"), "GitHub Actions");
+    assert_eq!(read_json(&merge_runner.join("farm/merge.json"))["inputs"].as_array().unwrap().len(), 4);
+
+    // Slurm: the array tasks, then the merge, on a shared directory.
+    let slurm = d.join("slurm");
+    let out = slurm.join("farm").to_string_lossy().into_owned();
+    assert!(read("slurm/bake-shard.sbatch").contains("#SBATCH --array=0-3"));
+    for k in 0..4 {
+        let env = [
+            ("SCENE", scene.clone()),
+            ("BAKE_ARGS", bake_args.clone()),
+            ("OUT", out.clone()),
+            ("SLURM_ARRAY_TASK_ID", k.to_string()),
+            ("SLURM_ARRAY_TASK_COUNT", "4".into()),
+        ];
+        run_shell("bash", s(&farm.join("slurm/bake-shard.sbatch")), true, &slurm, &env);
+    }
+    run_shell("bash", s(&farm.join("slurm/merge.sbatch")), true, &slurm, &[("OUT", out.clone())]);
+    same(&slurm.join("farm/scene.vlf"), "Slurm");
+
+    // Kubernetes: the indexed pods, then the merge pod, on a shared volume.
+    let shards_job = read("kubernetes/shards-job.yaml");
+    assert!(shards_job.contains("completions: 4") && shards_job.contains(r#"{ name: SHARDS, value: "4" }"#));
+    let k8s = d.join("k8s");
+    let farm_dir = k8s.join("farm").to_string_lossy().into_owned();
+    let [bake_script] = &shell_blocks(&shards_job)[..] else { panic!("one script in shards-job.yaml") };
+    for k in 0..4 {
+        let env = [
+            ("SCENE", scene.clone()),
+            ("BAKE_ARGS", bake_args.clone()),
+            ("SHARDS", "4".into()),
+            ("FARM_DIR", farm_dir.clone()),
+            ("JOB_COMPLETION_INDEX", k.to_string()),
+        ];
+        run_shell("sh", bake_script, false, &k8s, &env);
+    }
+    let [merge_script] = &shell_blocks(&read("kubernetes/merge-job.yaml"))[..] else { panic!("one merge script") };
+    run_shell("sh", merge_script, false, &k8s, &[("FARM_DIR", farm_dir.clone())]);
+    same(&k8s.join("farm/scene.vlf"), "Kubernetes");
+}
