@@ -99,8 +99,9 @@ pub enum Lookup {
     Hit(Box<Hit>),
     /// No entry under the key.
     Miss,
-    /// An entry was there but failed the checks; it was removed. Bake as on a miss.
-    Corrupt { problem: String },
+    /// An entry was there but could not be read, or failed the checks (and was removed). Bake
+    /// as on a miss.
+    Unusable { problem: String },
 }
 
 /// A materialised entry.
@@ -198,13 +199,16 @@ impl Cache {
     }
 
     /// Looks `key` up and, on a hit, writes the field to `output` atomically (see the module
-    /// documentation). I/O errors on the output are errors; a bad entry is a [`Lookup::Corrupt`].
+    /// documentation). I/O errors on the output are errors; a bad entry is [`Lookup::Unusable`].
     pub fn lookup(&self, key: &CacheKey, output: &Path) -> io::Result<Lookup> {
         let path = self.entry_path(key);
         let mut entry = match File::open(&path) {
             Ok(f) => f,
             Err(e) if e.kind() == io::ErrorKind::NotFound => return Ok(Lookup::Miss),
-            Err(e) => return Err(io::Error::new(e.kind(), format!("cannot read cache entry {}: {e}", path.display()))),
+            Err(e) => {
+                let problem = format!("cannot read cache entry {}: {e}", path.display());
+                return Ok(Lookup::Unusable { problem });
+            }
         };
         let tmp = AtomicFile::create(output)?;
         io::copy(&mut entry, &mut tmp.file())?;
@@ -238,7 +242,7 @@ impl Cache {
                         let _ = std::fs::remove_file(&path);
                     }
                 }
-                Ok(Lookup::Corrupt {
+                Ok(Lookup::Unusable {
                     problem: format!("cache entry {} is unusable and was removed: {problem}", path.display()),
                 })
             }

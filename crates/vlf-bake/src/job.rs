@@ -136,7 +136,7 @@ pub fn bake(job: &BakeJob<'_>, progress: &dyn Progress) -> Result<BakeOutcome, J
                 });
             }
             Lookup::Miss => {}
-            Lookup::Corrupt { problem } => {
+            Lookup::Unusable { problem } => {
                 cache_report.note = Some(problem.clone());
                 warnings.push(problem);
             }

@@ -121,15 +121,26 @@ struct CacheChoice {
 }
 
 impl CacheChoice {
-    /// The cache to use, or why there is none.
-    fn resolve(&self) -> Result<(Option<vlf_bake::cache::Cache>, Option<String>)> {
+    /// The cache to use, or why there is none. A cache directory that cannot be created is not
+    /// an error (a cache only ever saves time): the bake goes on without it, with a warning unless
+    /// `quiet`.
+    fn resolve(&self, quiet: bool) -> (Option<vlf_bake::cache::Cache>, Option<String>) {
         let env = std::env::var_os(vlf_bake::cache::CACHE_DIR_ENV).filter(|v| !v.is_empty()).map(PathBuf::from);
         if self.no_cache {
-            return Ok((None, Some("--no-cache".into())));
+            return (None, Some("--no-cache".into()));
         }
         match self.cache_dir.clone().or(env) {
-            None => Ok((None, Some(format!("no --cache-dir and no {}", vlf_bake::cache::CACHE_DIR_ENV)))),
-            Some(dir) => Ok((Some(vlf_bake::cache::Cache::open(&dir)?), None)),
+            None => (None, Some(format!("no --cache-dir and no {}", vlf_bake::cache::CACHE_DIR_ENV))),
+            Some(dir) => match vlf_bake::cache::Cache::open(&dir) {
+                Ok(cache) => (Some(cache), None),
+                Err(e) => {
+                    let note = format!("not using the cache: {e}");
+                    if !quiet {
+                        eprintln!("warning: {note}");
+                    }
+                    (None, Some(note))
+                }
+            },
         }
     }
 }
@@ -393,7 +404,7 @@ fn bake(a: &BakeArgs) -> Result<()> {
         max_bytes_per_triangle: a.max_bytes_per_triangle,
     };
     config.validate()?;
-    let (cache, cache_note) = a.cache.resolve()?;
+    let (cache, cache_note) = a.cache.resolve(a.quiet);
     let bar = Bar::new(a.quiet || a.json);
     let explain = |choice: &vlf_bake::Choice| {
         if choice.automatic {
@@ -467,7 +478,7 @@ fn bake(a: &BakeArgs) -> Result<()> {
 }
 
 fn merge(a: &MergeArgs) -> Result<()> {
-    let (cache, cache_note) = a.cache.resolve()?;
+    let (cache, cache_note) = a.cache.resolve(a.quiet);
     let bar = Bar::new(a.quiet || a.json);
     let out = vlf_bake::job::merge_job(&a.parts, &a.output, cache, cache_note, &bar)?;
     if !a.quiet {

@@ -412,6 +412,14 @@ fn damaged_cache_entries_are_caught_and_removed() {
     assert!(r.error().contains("1 of 1 cache entries failed verification"), "{}", r.stderr);
     assert!(r.stdout.contains("removed"), "{}", r.stdout);
     assert!(!entry.exists());
+
+    // A cache that cannot be used only costs the time it would have saved.
+    let not_a_dir = d.join("file");
+    std::fs::write(&not_a_dir, b"").unwrap();
+    let report = cached_bake(&input, &d.join("c.vlf"), &not_a_dir.join("cache"), &[]);
+    assert_eq!(report["cache"]["status"], "disabled");
+    assert!(report["cache"]["note"].as_str().unwrap().contains("cannot create the cache directory"), "{report}");
+    assert!(std::fs::read(d.join("c.vlf")).unwrap() == good);
 }
 
 /// `cache list` shows the entries; `cache prune` removes by age and then least recently used
