@@ -16,7 +16,9 @@ use std::fs::File;
 use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 use std::str::FromStr;
-use vlf_format::shard::{SHARD_KIND, SHARD_MAGIC, ShardRecord, is_per_direction, shard_directions, shared_hash};
+use vlf_format::shard::{
+    PER_DIRECTION_KINDS, SHARD_KIND, SHARD_MAGIC, ShardRecord, is_per_direction, shard_directions, shared_hash,
+};
 use vlf_format::{
     BeamRecord, FieldFile, HEADER_SIZE, Header, MAGIC, ParamsRecord, SectionEntry, SectionKind, StatisticsRecord,
     TABLE_ENTRY_SIZE, VERSION_MAJOR, VERSION_MINOR, codec, hex, kind_name,
@@ -182,7 +184,10 @@ impl ShardFile {
                 .find(|e| e.kind == kind as u32)
                 .ok_or_else(|| corrupt(format!("section {} is missing", kind.name())))
         };
-        for kind in SectionKind::ALL {
+        // Only what the merge itself reads is required here: every other section is carried over
+        // whole, whatever its kind (a format minor may add optional ones), and the field reader
+        // checks the merged field's required sections like any other field's.
+        for kind in PER_DIRECTION_KINDS {
             find(kind)?;
         }
         let params_entry = find(SectionKind::Params)?;

@@ -666,3 +666,79 @@ fn the_build_farm_recipes_run_locally() {
     run_shell("sh", merge_script, false, &k8s, &[("FARM_DIR", farm_dir.clone())]);
     same(&k8s.join("farm/scene.vlf"), "Kubernetes");
 }
+
+/// Rewrites the container `src` (magic `magic`) into `dst` with one more section, `extra`, placed
+/// right after the section of kind `after`; a shard's SHARD record is updated to match.
+fn with_extra_section(src: &Path, dst: &Path, magic: &[u8; 8], after: u32, extra: (u32, u32, &[u8])) {
+    use vlf_format::shard::{SHARD_KIND, ShardRecord, is_per_direction, shared_hash};
+    let bytes = std::fs::read(src).unwrap();
+    let header = vlf_format::check_header(&bytes, bytes.len() as u64, magic).unwrap();
+    let table =
+        vlf_format::check_table(&bytes[..128 + 72 * header.section_count as usize], bytes.len() as u64).unwrap();
+    let section = |e: &vlf_format::SectionEntry| &bytes[e.offset as usize..(e.offset + e.raw_length) as usize];
+    let (kind, element_size, data) = extra;
+    let extra_entry = vlf_format::SectionEntry {
+        kind,
+        codec: 0,
+        offset: 0,
+        stored_length: data.len() as u64,
+        raw_length: data.len() as u64,
+        element_size,
+        reserved: 0,
+        raw_hash: *blake3::hash(data).as_bytes(),
+    };
+    let mut shared = Vec::new();
+    for e in table.iter().filter(|e| e.kind != SHARD_KIND && !is_per_direction(e.kind)) {
+        shared.push(*e);
+        if e.kind == after {
+            shared.push(extra_entry);
+        }
+    }
+    let file = std::fs::File::options().read(true).write(true).create(true).truncate(true).open(dst).unwrap();
+    let mut f = vlf_format::FieldFile::create_with_magic(file, table.len() + 1, *magic).unwrap();
+    for e in &table {
+        if e.kind == SHARD_KIND {
+            let mut record: ShardRecord = bytemuck::pod_read_unaligned(section(e));
+            record.field_section_count += 1;
+            record.shared_hash = shared_hash(&shared);
+            f.append_kind(e.kind, e.element_size, bytemuck::bytes_of(&record)).unwrap();
+        } else {
+            f.append_kind(e.kind, e.element_size, section(e)).unwrap();
+        }
+        if e.kind == after {
+            f.append_kind(kind, element_size, data).unwrap();
+        }
+    }
+    f.finish(header.input_hash).unwrap();
+}
+
+/// A shared section of a kind this vlf-bake does not know (as a later format minor adds) flows
+/// through merge unchanged: the merged field equals the single bake with the same section, and
+/// opens as a field.
+#[test]
+fn merge_carries_sections_it_does_not_know() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let input = mesh("bunny.obj");
+    let single = d.join("single.vlf");
+    vlf(&["bake", s(&input), "-o", s(&single), "--quiet", SMALL[0], SMALL[1], SMALL[2], SMALL[3]]).ok();
+    let shards = bake_shards(&[input], &SMALL, 3, d, "s");
+    let strings = vlf_format::SectionKind::Strings as u32;
+    let extra: (u32, u32, &[u8]) = (1234, 8, b"materials, cameras and lights: 48 bytes.........");
+    let mut parts = Vec::new();
+    for (k, shard) in shards.iter().enumerate() {
+        let part = d.join(format!("extra-{k}.vlfs"));
+        with_extra_section(shard, &part, &vlf_format::shard::SHARD_MAGIC, strings, extra);
+        parts.push(part);
+    }
+    let expected = d.join("single-extra.vlf");
+    with_extra_section(&single, &expected, &vlf_format::MAGIC, strings, extra);
+    let merged = d.join("merged.vlf");
+    let refs: Vec<&Path> = parts.iter().map(|p| p.as_path()).collect();
+    vlf(&merge_args(&refs, &merged)).ok();
+    assert!(std::fs::read(&merged).unwrap() == std::fs::read(&expected).unwrap());
+    let field = Field::open(&merged).unwrap();
+    let e = field.reader().table.iter().find(|e| e.kind == 1234).expect("the unknown section is in the field");
+    assert_eq!(&field.reader().bytes[e.offset as usize..][..extra.2.len()], extra.2);
+    vlf(&["dump", s(&merged), "--verify", "--quiet"]).ok();
+}
