@@ -475,7 +475,7 @@ fn merge_stores_the_field_a_later_bake_hits() {
     let d = dir.path();
     let cache = d.join("cache");
     let input = mesh("bunny.obj");
-    let shards = bake_shards(&[input.clone()], &SMALL, 2, d, "s");
+    let shards = bake_shards(std::slice::from_ref(&input), &SMALL, 2, d, "s");
     let merged = d.join("merged.vlf");
     let mut args = merge_args(&[&shards[0], &shards[1]], &merged);
     args.extend(["--cache-dir".into(), s(&cache).into(), "--report".into(), s(&d.join("merge.json")).into()]);
