@@ -27,7 +27,9 @@
 //! modify, chmod or truncate in place, and none of that may reach the cache. An entry that fails
 //! the checks is removed and the bake proceeds. `vlf-bake cache verify` hashes every byte.
 
-use crate::bake::{AtomicFile, PARAMETER_KINDS, Prepared, SharedSection, input_hash, scene_sections};
+use crate::bake::{
+    AtomicFile, PARAMETER_KINDS, Prepared, SharedSection, input_hash, remove_stale_temp_files, scene_sections,
+};
 use crate::inspect;
 use std::fs::File;
 use std::io::{self, Seek};
@@ -41,8 +43,6 @@ use vlf_runtime::Field;
 pub const CACHE_DIR_ENV: &str = "VLF_CACHE_DIR";
 /// The subdirectory of this cache layout.
 pub const LAYOUT: &str = "v1";
-/// Temporary files older than this are left-overs of a crashed store; `prune` removes them.
-pub const STALE_TEMP: Duration = Duration::from_secs(3600);
 
 /// A cache key: 32 bytes, written as 64 lower-case hex digits.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -319,20 +319,22 @@ impl Cache {
     }
 
     /// Removes entries last used more than `max_age` ago, then the least recently used ones
-    /// until the rest fit in `max_size` bytes; and temporary files older than [`STALE_TEMP`].
+    /// until the rest fit in `max_size` bytes; and the temporary files of stores that crashed
+    /// (unlocked, see [`crate::bake::remove_stale_temp_files`]).
     pub fn prune(&self, max_size: Option<u64>, max_age: Option<Duration>) -> io::Result<PruneReport> {
         let mut report = PruneReport::default();
-        let now = SystemTime::now();
+        // A store writes `.KEY.vlf.XXXXXX.tmp` beside `KEY.vlf`: clean up per entry name.
+        let mut targets = std::collections::BTreeSet::new();
         for item in std::fs::read_dir(&self.dir)? {
-            let item = item?;
-            let name = item.file_name().to_string_lossy().into_owned();
-            if name.starts_with('.') && name.ends_with(".tmp") {
-                let old = item.metadata().ok().and_then(|m| m.modified().ok()).and_then(|m| now.duration_since(m).ok());
-                if old.is_some_and(|age| age > STALE_TEMP) {
-                    remove_if_present(&item.path())?;
-                    report.stale_temp_files += 1;
+            let name = item?.file_name().to_string_lossy().into_owned();
+            if let Some(target) = name.strip_prefix('.').and_then(|n| Some(&n[..n.strip_suffix(".tmp")?.rfind('.')?])) {
+                if is_entry_name(target).is_some() {
+                    targets.insert(target.to_string());
                 }
             }
+        }
+        for target in targets {
+            report.stale_temp_files += remove_stale_temp_files(&self.dir.join(target));
         }
         // Oldest last.
         let entries = self.list()?;

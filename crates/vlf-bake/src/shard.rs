@@ -88,6 +88,10 @@ pub enum ShardError {
     Duplicate { shard: ShardSpec, first: PathBuf, second: PathBuf },
     #[error("{missing} missing (a set of {count} shards); given: {given}")]
     Missing { missing: String, count: u32, given: String },
+    #[error(
+        "the merged field is {length} bytes, over the --max-bytes ceiling of {ceiling} bytes the shards were baked with (as a single bake would have said); lower --directions or --tiles, or raise --max-bytes"
+    )]
+    OverBudget { length: u64, ceiling: u64 },
 }
 
 /// A shard file whose header, table and small sections checked out: everything in the
@@ -435,6 +439,12 @@ pub fn merge(parts: &[PathBuf], output: &Path, progress: &dyn Progress) -> Resul
     let write_err = |error| ShardError::Write { path: output.to_path_buf(), error };
     let tmp = AtomicFile::create(output).map_err(write_err)?;
     let header = write_merged(&shards, tmp.file(), output, progress)?;
+    // Explicit parameters are held to --max-bytes (`bake` refuses such a field; each shard could
+    // only check its own part).
+    let p = &shards[0].params;
+    if p.requested_directions != 0 && p.requested_tiles != 0 && header.file_length > p.max_bytes {
+        return Err(ShardError::OverBudget { length: header.file_length, ceiling: p.max_bytes });
+    }
     tmp.commit().map_err(write_err)?;
     progress.end();
     let first = &shards[0];

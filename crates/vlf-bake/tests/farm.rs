@@ -742,3 +742,32 @@ fn merge_carries_sections_it_does_not_know() {
     assert_eq!(&field.reader().bytes[e.offset as usize..][..extra.2.len()], extra.2);
     vlf(&["dump", s(&merged), "--verify", "--quiet"]).ok();
 }
+
+/// Explicit parameters are held to --max-bytes: a single bake refuses a field over it, and so does
+/// the merge of shards that each fit.
+#[test]
+fn merge_holds_explicit_parameters_to_max_bytes() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let input = mesh("bunny.obj");
+    let params = ["--directions", "33", "--tiles", "16", "--max-bytes", "2MB"];
+    let single = vlf(&[
+        "bake",
+        s(&input),
+        "-o",
+        s(&d.join("single.vlf")),
+        params[0],
+        params[1],
+        params[2],
+        params[3],
+        params[4],
+        params[5],
+    ]);
+    assert!(single.error().contains("--max-bytes"), "{}", single.stderr);
+    let shards = bake_shards(std::slice::from_ref(&input), &params, 2, d, "s");
+    let out = d.join("out");
+    std::fs::create_dir(&out).unwrap();
+    let r = vlf(&merge_args(&[&shards[0], &shards[1]], &out.join("merged.vlf")));
+    assert!(r.error().contains("over the --max-bytes ceiling of 2000000 bytes"), "{}", r.stderr);
+    assert!(names_in(&out).is_empty());
+}
