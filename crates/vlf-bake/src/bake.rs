@@ -12,14 +12,17 @@
 use crate::params::{Choice, DepthPolicy, Params};
 use crate::raster::rasterize;
 use crate::scene::Scene;
+use crate::shard::ShardSpec;
 use rayon::prelude::*;
+use std::borrow::Cow;
 use std::fs::File;
 use std::io::{self, BufWriter, Seek, Write};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
+use vlf_format::shard::{PER_DIRECTION_KINDS, SHARD_KIND, SHARD_MAGIC, ShardRecord, shard_directions, shared_hash};
 use vlf_format::{
-    BeamRecord, FieldFile, HashingWriter, ParamsRecord, Request, SceneRecord, SectionKind, StatisticsRecord,
-    TileRecord, VERSION_MAJOR, Z_LEVELS,
+    BeamRecord, FieldFile, HashingWriter, Header, ParamsRecord, Request, SceneRecord, SectionEntry, SectionKind,
+    SectionWriter, StatisticsRecord, TileRecord, VERSION_MAJOR, Z_LEVELS,
 };
 use vlf_geom::Lattice;
 use vlf_geom::frame::{frame, mul};
@@ -291,7 +294,7 @@ pub fn bake_direction(
 }
 
 /// Adds one direction's statistics into the field's.
-fn merge_stats(total: &mut StatisticsRecord, d: &StatisticsRecord) {
+pub(crate) fn merge_stats(total: &mut StatisticsRecord, d: &StatisticsRecord) {
     total.tile_count += d.tile_count;
     total.empty_tiles += d.empty_tiles;
     total.tile_triangle_sum += d.tile_triangle_sum;
@@ -373,15 +376,16 @@ pub fn input_hash(scene: &Scene, request: &Request) -> [u8; 32] {
     h.update(&VERSION_MAJOR.to_le_bytes());
     h.update(&BAKER_REVISION.to_le_bytes());
     h.update(bytemuck::bytes_of(request));
-    for bytes in scene_sections(scene) {
+    for bytes in input_sections(scene) {
         h.update(&(bytes.len() as u64).to_le_bytes());
         h.update(bytes);
     }
     *h.finalize().as_bytes()
 }
 
-/// Raw bytes of TRIANGLES, PROVENANCE, SOURCES, INPUTS, STRINGS, in that order.
-fn scene_sections(scene: &Scene) -> [&[u8]; 5] {
+/// Raw bytes of TRIANGLES, PROVENANCE, SOURCES, INPUTS, STRINGS, in that order: what the input
+/// hash covers.
+fn input_sections(scene: &Scene) -> [&[u8]; 5] {
     [
         bytemuck::cast_slice(&scene.triangles),
         bytemuck::cast_slice(&scene.provenance),
@@ -389,6 +393,110 @@ fn scene_sections(scene: &Scene) -> [&[u8]; 5] {
         bytemuck::cast_slice(&scene.inputs),
         &scene.strings,
     ]
+}
+
+/// A section that every file of a bake holds whole: a field, and each of its shards
+/// (`formats/vlf-shard.md`), byte for byte.
+pub struct SharedSection<'a> {
+    pub kind: u32,
+    pub element_size: u32,
+    pub bytes: Cow<'a, [u8]>,
+}
+
+impl<'a> SharedSection<'a> {
+    fn new(kind: SectionKind, bytes: impl Into<Cow<'a, [u8]>>) -> Self {
+        SharedSection { kind: kind as u32, element_size: kind.element_size(), bytes: bytes.into() }
+    }
+
+    /// The table entry this section gets, but for its offset.
+    pub fn entry(&self) -> SectionEntry {
+        let len = self.bytes.len() as u64;
+        SectionEntry {
+            kind: self.kind,
+            codec: vlf_format::codec::RAW,
+            offset: 0,
+            stored_length: len,
+            raw_length: len,
+            element_size: self.element_size,
+            reserved: 0,
+            raw_hash: *blake3::hash(&self.bytes).as_bytes(),
+        }
+    }
+}
+
+/// The kinds of the shared sections computed from the chosen parameters (with the scene's
+/// sphere). Every other shared section depends on the scene alone, which is what the bake cache
+/// keys on (`crate::cache`).
+pub const PARAMETER_KINDS: [SectionKind; 4] =
+    [SectionKind::Params, SectionKind::Directions, SectionKind::Rotations, SectionKind::Lookup];
+
+/// The shared sections that depend on the scene alone, in file order: SCENE, then TRIANGLES,
+/// PROVENANCE, SOURCES, INPUTS, STRINGS. A new section derived from the inputs goes here, so that
+/// fields, shards, merges and the cache key all carry it.
+pub fn scene_sections<'a>(prep: &Prepared<'a>) -> Vec<SharedSection<'a>> {
+    let scene = prep.scene;
+    let record = SceneRecord {
+        center: prep.center,
+        radius: prep.radius,
+        aabb_min: prep.aabb.0,
+        aabb_max: prep.aabb.1,
+        triangle_count: scene.triangles.len() as u64,
+        source_count: scene.sources.len() as u32,
+        input_count: scene.inputs.len() as u32,
+        dropped_degenerate: scene.report.dropped_degenerate,
+        reserved: [0; 3],
+    };
+    let [tri_bytes, prov_bytes, src_bytes, input_bytes, string_bytes] = input_sections(scene);
+    vec![
+        SharedSection::new(SectionKind::Scene, bytemuck::bytes_of(&record).to_vec()),
+        SharedSection::new(SectionKind::Triangles, tri_bytes),
+        SharedSection::new(SectionKind::Provenance, prov_bytes),
+        SharedSection::new(SectionKind::Sources, src_bytes),
+        SharedSection::new(SectionKind::Inputs, input_bytes),
+        SharedSection::new(SectionKind::Strings, string_bytes),
+    ]
+}
+
+/// The shared sections computed from the chosen parameters ([`PARAMETER_KINDS`]), in file order.
+fn parameter_sections(params: &Params, request: &Request) -> Vec<SharedSection<'static>> {
+    let lattice = Lattice::new(params.lattice_n);
+    let directions = lattice.directions();
+    let rotations: Vec<[f64; 9]> = directions.iter().map(|&d| frame(d)).collect();
+    let dir_records: Vec<[f32; 4]> = directions.iter().map(|d| [d[0] as f32, d[1] as f32, d[2] as f32, 0.0]).collect();
+    let record = params_record(params, request);
+    vec![
+        SharedSection::new(SectionKind::Params, bytemuck::bytes_of(&record).to_vec()),
+        SharedSection::new(SectionKind::Directions, bytemuck::cast_slice(&dir_records).to_vec()),
+        SharedSection::new(SectionKind::Rotations, bytemuck::cast_slice(&rotations).to_vec()),
+        SharedSection::new(SectionKind::Lookup, bytemuck::cast_slice(&lattice.lookup_table()).to_vec()),
+    ]
+}
+
+/// The PARAMS record (`formats/vlf.md` §5.2) of a bake with `params` chosen for `request`.
+pub fn params_record(params: &Params, request: &Request) -> ParamsRecord {
+    ParamsRecord {
+        lattice_n: params.lattice_n,
+        direction_count: Lattice::new(params.lattice_n).direction_count() as u32,
+        tile_resolution: params.tiles,
+        leaf_size: params.depth.leaf_size,
+        max_depth: params.depth.max_depth,
+        requested_directions: request.requested_directions,
+        requested_tiles: request.requested_tiles,
+        reserved0: 0,
+        max_bytes: request.max_bytes,
+        margin: params.margin,
+        max_bytes_per_triangle: request.max_bytes_per_triangle,
+        reserved1: 0,
+    }
+}
+
+/// Every shared section of the field, in file order: SCENE, the parameter sections, then the
+/// rest of the scene sections. The per-direction sections (`vlf_format::shard::PER_DIRECTION_KINDS`)
+/// follow them in every file a bake writes.
+pub fn shared_sections<'a>(prep: &Prepared<'a>, params: &Params, request: &Request) -> Vec<SharedSection<'a>> {
+    let mut sections = scene_sections(prep);
+    sections.splice(1..1, parameter_sections(params, request));
+    sections
 }
 
 /// A section spilled to an anonymous temporary file while it is produced.
@@ -417,12 +525,68 @@ pub fn parent_dir(path: &Path) -> PathBuf {
     }
 }
 
+/// The per-direction sections of a file being baked, after its shared sections, in this order:
+/// BEAMS and STATISTICS (reserved, filled last), TILES (reserved, filled direction by direction),
+/// TRIANGLE_IDS (streamed behind it) and LEAF_BOUNDS (spilled to a temporary file, appended at
+/// the end): each byte is written once. Fields and shards share this layout, which `merge`
+/// follows to reproduce a field byte for byte.
+struct DirectionSections {
+    beams_out: SectionWriter,
+    stats_out: SectionWriter,
+    tiles: SectionWriter,
+    ids: SectionWriter,
+    bounds: Spill,
+}
+
+/// Direction by direction: the BEAMS records (bases counted from the file's first direction) and
+/// the STATISTICS of the directions written so far.
+#[derive(Default)]
+struct DirectionTotals {
+    beams: Vec<BeamRecord>,
+    stats: Option<StatisticsRecord>,
+    leaf_base: u64,
+    id_base: u64,
+}
+
+impl DirectionSections {
+    fn open(f: &mut FieldFile, directions: u64, n2: u64, spill_dir: &Path) -> io::Result<Self> {
+        Ok(DirectionSections {
+            beams_out: f.reserve(SectionKind::Beams, directions * size_of::<BeamRecord>() as u64)?,
+            stats_out: f.reserve(SectionKind::Statistics, size_of::<StatisticsRecord>() as u64)?,
+            tiles: f.reserve(SectionKind::Tiles, directions * n2 * size_of::<TileRecord>() as u64)?,
+            ids: f.stream(SectionKind::TriangleIds)?,
+            bounds: Spill::new(spill_dir)?,
+        })
+    }
+
+    fn push(&mut self, d: &DirectionData, totals: &mut DirectionTotals) -> io::Result<()> {
+        self.tiles.write_all(bytemuck::cast_slice(&d.tiles))?;
+        self.ids.write_all(bytemuck::cast_slice(&d.ids))?;
+        self.bounds.writer.write_all(bytemuck::cast_slice(&d.bounds))?;
+        let leaf_count = d.bounds.len() as u64 - 1;
+        let id_count = d.ids.len() as u64;
+        totals.beams.push(BeamRecord { leaf_base: totals.leaf_base, leaf_count, id_base: totals.id_base, id_count });
+        totals.leaf_base += leaf_count + 1;
+        totals.id_base += id_count;
+        merge_stats(totals.stats.get_or_insert_with(StatisticsRecord::zeroed_record), &d.stats);
+        Ok(())
+    }
+
+    fn finish(mut self, f: &mut FieldFile, totals: &DirectionTotals) -> io::Result<StatisticsRecord> {
+        f.finish_section(self.tiles)?;
+        f.finish_section(self.ids)?;
+        let (mut bounds_file, bounds_len, bounds_hash) = self.bounds.finish()?;
+        f.append_from(SectionKind::LeafBounds, &mut bounds_file, bounds_len, bounds_hash)?;
+        self.beams_out.write_all(bytemuck::cast_slice(&totals.beams))?;
+        f.finish_section(self.beams_out)?;
+        let stats = totals.stats.unwrap_or_else(StatisticsRecord::zeroed_record);
+        self.stats_out.write_all(bytemuck::bytes_of(&stats))?;
+        f.finish_section(self.stats_out)?;
+        Ok(stats)
+    }
+}
+
 /// Bakes `scene` with the chosen `choice` into the field file `output`, atomically.
-///
-/// The file is written in place, each byte once: the small sections first, then TILES (whose
-/// size is known) filled direction by direction, TRIANGLE_IDS streamed behind it, and
-/// LEAF_BOUNDS (the only section spilled to a temporary file) appended at the end; BEAMS and
-/// STATISTICS are reserved up front and filled last.
 pub fn bake_to_path(
     prep: &Prepared<'_>,
     choice: &Choice,
@@ -431,80 +595,118 @@ pub fn bake_to_path(
     progress: &dyn Progress,
 ) -> Result<BakeSummary, BakeError> {
     let start = Instant::now();
-    let params = &choice.params;
-    let scene = prep.scene;
-    let dir = parent_dir(output);
     let io_err = |error: io::Error| BakeError::Io { path: output.to_path_buf(), error };
-
-    let lattice = Lattice::new(params.lattice_n);
-    let directions = lattice.directions();
-    let rotations: Vec<[f64; 9]> = directions.iter().map(|&d| frame(d)).collect();
-    let dir_records: Vec<[f32; 4]> = directions.iter().map(|d| [d[0] as f32, d[1] as f32, d[2] as f32, 0.0]).collect();
-    let lookup = lattice.lookup_table();
-    let l = directions.len();
-    let n2 = params.tiles as u64 * params.tiles as u64;
-
-    let scene_record = SceneRecord {
-        center: prep.center,
-        radius: prep.radius,
-        aabb_min: prep.aabb.0,
-        aabb_max: prep.aabb.1,
-        triangle_count: scene.triangles.len() as u64,
-        source_count: scene.sources.len() as u32,
-        input_count: scene.inputs.len() as u32,
-        dropped_degenerate: scene.report.dropped_degenerate,
-        reserved: [0; 3],
-    };
-    let params_record = ParamsRecord {
-        lattice_n: params.lattice_n,
-        direction_count: l as u32,
-        tile_resolution: params.tiles,
-        leaf_size: params.depth.leaf_size,
-        max_depth: params.depth.max_depth,
-        requested_directions: request.requested_directions,
-        requested_tiles: request.requested_tiles,
-        reserved0: 0,
-        max_bytes: request.max_bytes,
-        margin: params.margin,
-        max_bytes_per_triangle: request.max_bytes_per_triangle,
-        reserved1: 0,
-    };
-    let hash = input_hash(scene, request);
-
     let tmp = AtomicFile::create(output).map_err(io_err)?;
-    let mut f = FieldFile::create(tmp.file().try_clone().map_err(io_err)?, SectionKind::ALL.len()).map_err(io_err)?;
-    let [tri_bytes, prov_bytes, src_bytes, input_bytes, string_bytes] = scene_sections(scene);
-    let small_sections = [
-        (SectionKind::Scene, bytemuck::bytes_of(&scene_record)),
-        (SectionKind::Params, bytemuck::bytes_of(&params_record)),
-        (SectionKind::Directions, bytemuck::cast_slice(&dir_records)),
-        (SectionKind::Rotations, bytemuck::cast_slice(&rotations)),
-        (SectionKind::Lookup, bytemuck::cast_slice(&lookup)),
-        (SectionKind::Triangles, tri_bytes),
-        (SectionKind::Provenance, prov_bytes),
-        (SectionKind::Sources, src_bytes),
-        (SectionKind::Inputs, input_bytes),
-        (SectionKind::Strings, string_bytes),
-    ];
-    for (kind, bytes) in small_sections {
-        f.append(kind, bytes).map_err(io_err)?;
+    let baked = bake_into(prep, choice, request, tmp.file(), output, None, progress)?;
+    tmp.commit().map_err(io_err)?;
+    progress.end();
+    Ok(baked.summary(prep, choice, output, start.elapsed().as_secs_f64()))
+}
+
+/// What [`bake_into`] wrote.
+#[derive(Clone, Debug)]
+pub struct Baked {
+    pub header: Header,
+    pub statistics: StatisticsRecord,
+    /// The directions the file holds: all of them for a field, the shard's for a shard.
+    pub directions: std::ops::Range<u32>,
+    pub direction_count: u32,
+}
+
+impl Baked {
+    /// The summary `bake` prints.
+    pub fn summary(&self, prep: &Prepared<'_>, choice: &Choice, output: &Path, seconds: f64) -> BakeSummary {
+        let params = &choice.params;
+        BakeSummary {
+            output: output.to_path_buf(),
+            triangles: prep.scene.triangles.len() as u64,
+            dropped_degenerate: prep.scene.report.dropped_degenerate,
+            directions: self.direction_count,
+            lattice_n: params.lattice_n,
+            tile_resolution: params.tiles,
+            leaf_size: params.depth.leaf_size,
+            max_depth: params.depth.max_depth,
+            automatic: choice.automatic,
+            choice: choice.reason.clone(),
+            estimated_bytes: choice.estimated_bytes,
+            bytes: self.header.file_length,
+            seconds,
+            content_hash: vlf_format::hex(&self.header.content_hash),
+            input_hash: vlf_format::hex(&self.header.input_hash),
+            statistics: Statistics::from_record(&self.statistics),
+        }
+    }
+}
+
+/// Bakes into `out` (an empty, writable file that will be at `path`; its directory holds the
+/// spill file): the whole field, or with `shard` one shard of it (`formats/vlf-shard.md`).
+///
+/// The file is written in place, each byte once: the shared sections first (after the SHARD
+/// record of a shard), then the per-direction sections ([`DirectionSections`]). Leaves the
+/// "writing" progress phase open; the caller ends it after committing the file.
+pub fn bake_into(
+    prep: &Prepared<'_>,
+    choice: &Choice,
+    request: &Request,
+    out: &File,
+    path: &Path,
+    shard: Option<ShardSpec>,
+    progress: &dyn Progress,
+) -> Result<Baked, BakeError> {
+    let params = &choice.params;
+    let io_err = |error: io::Error| BakeError::Io { path: path.to_path_buf(), error };
+
+    let shared = shared_sections(prep, params, request);
+    let direction_count = Lattice::new(params.lattice_n).direction_count() as u32;
+    let range = match shard {
+        None => 0..direction_count,
+        Some(s) => shard_directions(s.index, s.count, direction_count),
+    };
+    let rotations: Vec<[f64; 9]> = Lattice::new(params.lattice_n).directions().iter().map(|&d| frame(d)).collect();
+    let n2 = params.tiles as u64 * params.tiles as u64;
+    let hash = input_hash(prep.scene, request);
+
+    let section_count = shared.len() + PER_DIRECTION_KINDS.len() + shard.is_some() as usize;
+    let out = out.try_clone().map_err(io_err)?;
+    let mut f = match shard {
+        None => FieldFile::create(out, section_count),
+        Some(_) => FieldFile::create_with_magic(out, section_count, SHARD_MAGIC),
+    }
+    .map_err(io_err)?;
+    if let Some(s) = shard {
+        let entries: Vec<SectionEntry> = shared.iter().map(SharedSection::entry).collect();
+        let record = ShardRecord {
+            shard_index: s.index,
+            shard_count: s.count,
+            direction_count,
+            first_direction: range.start,
+            end_direction: range.end,
+            baker_revision: BAKER_REVISION,
+            field_section_count: (section_count - 1) as u32,
+            reserved: 0,
+            shared_hash: shared_hash(&entries),
+        };
+        f.append_kind(SHARD_KIND, size_of::<ShardRecord>() as u32, bytemuck::bytes_of(&record)).map_err(io_err)?;
+    }
+    for s in &shared {
+        f.append_kind(s.kind, s.element_size, &s.bytes).map_err(io_err)?;
     }
     // Explicit parameters are held to --max-bytes as a ceiling (automatic ones were chosen to fit
-    // it by estimate): the bake stops as soon as the bytes it must write exceed it. `fixed` counts
-    // every section whose size is known now, without padding, so the running check never fires
-    // early; the exact length is checked once the file is complete.
+    // it by estimate): the bake stops as soon as the bytes the field needs exceed it. `fixed`
+    // counts every section of the field whose size is known now, without padding, and a shard
+    // adds its own directions' leaves and ids to it: a lower bound on the field's size, so the
+    // running check never fires early. A field's exact length is checked once it is complete,
+    // a sharded field's by merge.
     let ceiling = if choice.automatic { u64::MAX } else { request.max_bytes };
-    let fixed = (vlf_format::HEADER_SIZE + vlf_format::TABLE_ENTRY_SIZE * SectionKind::ALL.len()) as u64
-        + small_sections.iter().map(|(_, b)| b.len() as u64).sum::<u64>()
-        + l as u64 * (size_of::<BeamRecord>() as u64 + n2 * size_of::<TileRecord>() as u64)
+    let l = direction_count as u64;
+    let fixed = (vlf_format::HEADER_SIZE + vlf_format::TABLE_ENTRY_SIZE * (shared.len() + PER_DIRECTION_KINDS.len()))
+        as u64
+        + shared.iter().map(|s| s.bytes.len() as u64).sum::<u64>()
+        + l * (size_of::<BeamRecord>() as u64 + n2 * size_of::<TileRecord>() as u64)
         + size_of::<StatisticsRecord>() as u64;
-    let over_budget = |at_least: u64, baked: usize| BakeError::OverBudget { ceiling, at_least, baked, directions: l };
-    let mut beams_out = f.reserve(SectionKind::Beams, l as u64 * size_of::<BeamRecord>() as u64).map_err(io_err)?;
-    let mut stats_out = f.reserve(SectionKind::Statistics, size_of::<StatisticsRecord>() as u64).map_err(io_err)?;
-    let mut tiles_out =
-        f.reserve(SectionKind::Tiles, l as u64 * n2 * size_of::<TileRecord>() as u64).map_err(io_err)?;
-    let mut ids_out = f.stream(SectionKind::TriangleIds).map_err(io_err)?;
-    let mut bounds = Spill::new(&dir).map_err(io_err)?;
+    let over_budget =
+        |at_least: u64, baked: usize| BakeError::OverBudget { ceiling, at_least, baked, directions: l as usize };
+    let mut sections = DirectionSections::open(&mut f, range.len() as u64, n2, &parent_dir(path)).map_err(io_err)?;
 
     // Directions are baked in parallel, chunk by chunk; a writer thread appends each finished
     // chunk in direction order while the next one is computed. The channel holds at most two
@@ -514,37 +716,29 @@ pub fn bake_to_path(
     const CHUNK_BYTES: u64 = 64 << 20;
     let threads = rayon::current_num_threads().max(1);
     let (send, receive) = std::sync::mpsc::sync_channel::<Vec<DirectionData>>(2);
-    progress.begin("baking directions", l as u64);
-    let (tiles_w, ids_w, bounds_w) = (&mut tiles_out, &mut ids_out, &mut bounds.writer);
+    progress.begin("baking directions", range.len() as u64);
+    let mut totals = DirectionTotals::default();
+    let (sections_w, totals_w) = (&mut sections, &mut totals);
     let (written, baked) = std::thread::scope(|scope| {
-        let writer = scope.spawn(move || -> Result<(Vec<BeamRecord>, StatisticsRecord), BakeError> {
-            let mut beams = Vec::with_capacity(l);
-            let mut stats = StatisticsRecord::zeroed_record();
-            let (mut leaf_base, mut id_base) = (0u64, 0u64);
+        let writer = scope.spawn(move || -> Result<(), BakeError> {
             for chunk in receive {
                 for d in chunk {
-                    let at_least = fixed + 4 * (leaf_base + id_base + (d.bounds.len() + d.ids.len()) as u64);
+                    let at_least =
+                        fixed + 4 * (totals_w.leaf_base + totals_w.id_base + (d.bounds.len() + d.ids.len()) as u64);
                     if at_least > ceiling {
-                        return Err(over_budget(at_least, beams.len() + 1));
+                        return Err(over_budget(at_least, totals_w.beams.len() + 1));
                     }
-                    tiles_w.write_all(bytemuck::cast_slice(&d.tiles)).map_err(io_err)?;
-                    ids_w.write_all(bytemuck::cast_slice(&d.ids)).map_err(io_err)?;
-                    bounds_w.write_all(bytemuck::cast_slice(&d.bounds)).map_err(io_err)?;
-                    let leaf_count = d.bounds.len() as u64 - 1;
-                    beams.push(BeamRecord { leaf_base, leaf_count, id_base, id_count: d.ids.len() as u64 });
-                    leaf_base += leaf_count + 1;
-                    id_base += d.ids.len() as u64;
-                    merge_stats(&mut stats, &d.stats);
+                    sections_w.push(&d, totals_w).map_err(io_err)?;
                 }
             }
-            Ok((beams, stats))
+            Ok(())
         });
         let mut baked = Ok(());
-        let (mut chunk_start, mut chunk, mut produced) = (0usize, threads, 0u64);
-        while chunk_start < l {
-            let range = chunk_start..(chunk_start + chunk).min(l);
-            chunk_start = range.end;
-            let result: Result<Vec<DirectionData>, BakeError> = range
+        let (mut chunk_start, mut chunk, mut produced) = (range.start as usize, threads, 0u64);
+        while chunk_start < range.end as usize {
+            let chunk_range = chunk_start..(chunk_start + chunk).min(range.end as usize);
+            chunk_start = chunk_range.end;
+            let result: Result<Vec<DirectionData>, BakeError> = chunk_range
                 .into_par_iter()
                 .map_init(Scratch::default, |s, j| {
                     let d = bake_direction(prep, params, &rotations[j], j, s);
@@ -556,7 +750,7 @@ pub fn bake_to_path(
                 // A send fails only if the writer stopped on an error, which join reports below.
                 Ok(done) => {
                     produced += done.iter().map(DirectionData::bytes).sum::<u64>();
-                    let per_direction = (produced / chunk_start as u64).max(1);
+                    let per_direction = (produced / (chunk_start - range.start as usize) as u64).max(1);
                     chunk = ((CHUNK_BYTES / per_direction) as usize).clamp(threads, 64 * threads);
                     if send.send(done).is_err() {
                         break;
@@ -574,42 +768,15 @@ pub fn bake_to_path(
     });
     progress.end();
     baked?;
-    let (beams, stats) = written?;
+    written?;
 
     progress.begin("writing", 1);
-    f.finish_section(tiles_out).map_err(io_err)?;
-    f.finish_section(ids_out).map_err(io_err)?;
-    let (mut bounds_file, bounds_len, bounds_hash) = bounds.finish().map_err(io_err)?;
-    f.append_from(SectionKind::LeafBounds, &mut bounds_file, bounds_len, bounds_hash).map_err(io_err)?;
-    beams_out.write_all(bytemuck::cast_slice(&beams)).map_err(io_err)?;
-    f.finish_section(beams_out).map_err(io_err)?;
-    stats_out.write_all(bytemuck::bytes_of(&stats)).map_err(io_err)?;
-    f.finish_section(stats_out).map_err(io_err)?;
+    let statistics = sections.finish(&mut f, &totals).map_err(io_err)?;
     let (_, header) = f.finish(hash).map_err(io_err)?;
-    if header.file_length > ceiling {
-        return Err(over_budget(header.file_length, l));
+    if shard.is_none() && header.file_length > ceiling {
+        return Err(over_budget(header.file_length, direction_count as usize));
     }
-    tmp.commit().map_err(io_err)?;
-    progress.end();
-
-    Ok(BakeSummary {
-        output: output.to_path_buf(),
-        triangles: scene.triangles.len() as u64,
-        dropped_degenerate: scene.report.dropped_degenerate,
-        directions: l as u32,
-        lattice_n: params.lattice_n,
-        tile_resolution: params.tiles,
-        leaf_size: params.depth.leaf_size,
-        max_depth: params.depth.max_depth,
-        automatic: choice.automatic,
-        choice: choice.reason.clone(),
-        estimated_bytes: choice.estimated_bytes,
-        bytes: header.file_length,
-        seconds: start.elapsed().as_secs_f64(),
-        content_hash: vlf_format::hex(&header.content_hash),
-        input_hash: vlf_format::hex(&header.input_hash),
-        statistics: Statistics::from_record(&stats),
-    })
+    Ok(Baked { header, statistics, directions: range, direction_count })
 }
 
 /// A file being written next to its final path: a temporary file `.NAME.XXXXXX.tmp` in the same
@@ -681,6 +848,11 @@ impl AtomicFile {
 
     pub fn file(&self) -> &File {
         self.tmp.as_file()
+    }
+
+    /// The temporary file's path (in the destination directory), for checks before the commit.
+    pub fn temp_path(&self) -> &Path {
+        self.tmp.path()
     }
 
     /// Syncs the file and renames it over the path, then syncs the directory.

@@ -11,12 +11,16 @@
 //! ```
 
 pub mod bake;
+pub mod cache;
 pub mod generate;
 pub mod import;
 pub mod inspect;
+pub mod job;
 pub mod params;
 pub mod raster;
+pub mod report;
 pub mod scene;
+pub mod shard;
 
 pub use bake::{BAKER_REVISION, BakeError, BakeSummary, NoProgress, Prepared, Progress, Statistics, input_hash};
 pub use params::{BakeConfig, Choice, DepthPolicy, Params, choose};

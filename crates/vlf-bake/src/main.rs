@@ -14,7 +14,7 @@ use std::process::ExitCode;
 use std::sync::Mutex;
 use std::time::Instant;
 use vlf_bake::params::{DEFAULT_LEAF_SIZE, DEFAULT_MAX_DEPTH, human_bytes};
-use vlf_bake::{BakeConfig, DepthPolicy, Progress, generate, import, inspect};
+use vlf_bake::{BakeConfig, DepthPolicy, Progress, generate, inspect};
 use vlf_runtime::{Field, Hit, Ray};
 
 #[derive(Parser)]
@@ -33,8 +33,12 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Bake one or more meshes into a field file.
+    /// Bake one or more meshes into a field file (or, with --shard, one shard of it).
     Bake(BakeArgs),
+    /// Merge the shards of a sharded bake into the field a single bake writes, byte for byte.
+    Merge(MergeArgs),
+    /// List, verify or prune a bake cache directory.
+    Cache(CacheArgs),
     /// Describe a field: header, parameters, sections, statistics; --verify checks every byte.
     Dump(DumpArgs),
     /// Trace a file of rays against a field and write one hit record per ray.
@@ -94,6 +98,102 @@ struct BakeArgs {
     /// Print the summary as one JSON object.
     #[arg(long)]
     json: bool,
+    /// Bake only shard K of N (K = 0..N-1): its share of the directions, into a shard file for
+    /// `vlf-bake merge` (docs/build-farms.md).
+    #[arg(long, value_name = "K/N")]
+    shard: Option<vlf_bake::shard::ShardSpec>,
+    #[command(flatten)]
+    cache: CacheChoice,
+    /// Write a JSON report (inputs, parameters, phase timings, peak memory, output, cache) to FILE.
+    #[arg(long, value_name = "FILE.json")]
+    report: Option<PathBuf>,
+}
+
+#[derive(Args)]
+struct CacheChoice {
+    /// Bake cache directory: reuse the field of unchanged inputs, store new ones
+    /// (default: the VLF_CACHE_DIR environment variable).
+    #[arg(long, value_name = "DIR")]
+    cache_dir: Option<PathBuf>,
+    /// Do not use a cache, even if VLF_CACHE_DIR is set.
+    #[arg(long, conflicts_with = "cache_dir")]
+    no_cache: bool,
+}
+
+impl CacheChoice {
+    /// The cache to use, or why there is none. A cache directory that cannot be created is not
+    /// an error (a cache only ever saves time): the bake goes on without it, with a warning unless
+    /// `quiet`.
+    fn resolve(&self, quiet: bool) -> (Option<vlf_bake::cache::Cache>, Option<String>) {
+        let env = std::env::var_os(vlf_bake::cache::CACHE_DIR_ENV).filter(|v| !v.is_empty()).map(PathBuf::from);
+        if self.no_cache {
+            return (None, Some("--no-cache".into()));
+        }
+        match self.cache_dir.clone().or(env) {
+            None => (None, Some(format!("no --cache-dir and no {}", vlf_bake::cache::CACHE_DIR_ENV))),
+            Some(dir) => match vlf_bake::cache::Cache::open(&dir) {
+                Ok(cache) => (Some(cache), None),
+                Err(e) => {
+                    let note = format!("not using the cache: {e}");
+                    if !quiet {
+                        eprintln!("warning: {note}");
+                    }
+                    (None, Some(note))
+                }
+            },
+        }
+    }
+}
+
+#[derive(Args)]
+struct MergeArgs {
+    /// The shard files of one bake, each once, in any order.
+    #[arg(required = true, value_name = "SHARD")]
+    parts: Vec<PathBuf>,
+    /// The field file to write (replaced atomically).
+    #[arg(short, long, value_name = "FIELD")]
+    output: PathBuf,
+    #[command(flatten)]
+    cache: CacheChoice,
+    /// Write a JSON report to FILE (the schema of `bake --report`).
+    #[arg(long, value_name = "FILE.json")]
+    report: Option<PathBuf>,
+    /// No progress bar and no summary on success.
+    #[arg(short, long)]
+    quiet: bool,
+    /// Print the summary as one JSON object.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Args)]
+struct CacheArgs {
+    #[command(subcommand)]
+    action: CacheAction,
+    /// The cache directory (default: the VLF_CACHE_DIR environment variable).
+    #[arg(long, global = true, value_name = "DIR")]
+    cache_dir: Option<PathBuf>,
+    /// Print one JSON value instead of text.
+    #[arg(long, global = true)]
+    json: bool,
+}
+
+#[derive(Subcommand)]
+enum CacheAction {
+    /// List the entries, most recently used first.
+    List,
+    /// Check every byte of every entry (as `dump --verify`) and its key; remove the bad ones.
+    Verify,
+    /// Remove entries unused for longer than --max-age, then the least recently used ones until
+    /// the cache fits in --max-size; and temporary files left by crashed bakes.
+    Prune {
+        /// Keep at most this many bytes (e.g. 20GiB).
+        #[arg(long, value_parser = parse_size, value_name = "SIZE")]
+        max_size: Option<u64>,
+        /// Remove entries not used for this long (e.g. 30d, 12h, 90m).
+        #[arg(long, value_parser = vlf_bake::cache::parse_duration, value_name = "DURATION")]
+        max_age: Option<std::time::Duration>,
+    },
 }
 
 #[derive(Args)]
@@ -201,6 +301,8 @@ fn is_broken_pipe(e: &anyhow::Error) -> bool {
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Bake(a) => with_threads(a.threads, || bake(&a)),
+        Command::Merge(a) => merge(&a),
+        Command::Cache(a) => cache(&a),
         Command::Dump(a) => dump(&a),
         Command::Trace(a) => with_threads(a.threads, || trace(&a)),
         Command::Rays(a) => rays(&a),
@@ -302,52 +404,194 @@ fn bake(a: &BakeArgs) -> Result<()> {
         max_bytes_per_triangle: a.max_bytes_per_triangle,
     };
     config.validate()?;
+    let (cache, cache_note) = a.cache.resolve(a.quiet);
     let bar = Bar::new(a.quiet || a.json);
-    let started = Instant::now();
-    let scene = import::import_paths(&a.inputs)?;
-    for w in &scene.report.warnings {
-        if !a.quiet {
+    let explain = |choice: &vlf_bake::Choice| {
+        if choice.automatic {
+            eprintln!("{}", choice.reason);
+        }
+    };
+    let job = vlf_bake::job::BakeJob {
+        inputs: &a.inputs,
+        output: &a.output,
+        config,
+        shard: a.shard,
+        cache,
+        cache_note,
+        on_choice: (!a.quiet && !a.json).then_some(&explain as &dyn Fn(&vlf_bake::Choice)),
+    };
+    let out = vlf_bake::job::bake(&job, &bar)?;
+    if !a.quiet {
+        for w in out.import.warnings.iter().chain(&out.warnings) {
             eprintln!("warning: {w}");
         }
     }
-    let prep = vlf_bake::Prepared::new(&scene);
-    let choice = vlf_bake::choose(&prep, &config)?;
-    if !a.quiet && !a.json && choice.automatic {
-        eprintln!("{}", choice.reason);
+    if let Some(path) = &a.report {
+        out.report.write(path).with_context(|| format!("cannot write the report {}", path.display()))?;
     }
-    let mut summary = vlf_bake::bake::bake_to_path(&prep, &choice, &config.request(), &a.output, &bar)?;
-    summary.seconds = started.elapsed().as_secs_f64();
+    let summary = &out.summary;
     if a.json {
         #[derive(serde::Serialize)]
         struct Out<'a> {
             #[serde(flatten)]
             summary: &'a vlf_bake::BakeSummary,
             import: &'a vlf_bake::ImportReport,
+            cache: &'a str,
+            #[serde(skip_serializing_if = "Option::is_none")]
+            shard: Option<&'a vlf_bake::report::ShardInfo>,
         }
-        stdout_line(&serde_json::to_string(&Out { summary: &summary, import: &scene.report })?)?;
+        let out = Out { summary, import: &out.import, cache: out.report.cache.status, shard: out.shard.as_ref() };
+        stdout_line(&serde_json::to_string(&out)?)?;
     } else if !a.quiet {
-        let s = &summary;
+        let s = summary;
+        let what = match &out.shard {
+            Some(sh) => format!(
+                "shard {}/{} (directions {}..{} of {})",
+                sh.index, sh.count, sh.first_direction, sh.end_direction, sh.direction_count
+            ),
+            None => format!("{} directions", s.directions),
+        };
+        let how = match &out.cache_hit {
+            Some(entry) => format!("copied from the cache ({}) in {:.2} s", entry.display(), s.seconds),
+            None => format!("in {:.2} s", s.seconds),
+        };
         let mut text = format!(
-            "baked {}: {} triangles, {} directions × {}² tiles, {} ({} bytes) in {:.2} s\n  content hash {}\n  input hash   {}",
+            "baked {}: {} triangles, {what} × {}² tiles, {} ({} bytes) {how}\n  content hash {}\n  input hash   {}",
             s.output.display(),
             s.triangles,
-            s.directions,
             s.tile_resolution,
             human_bytes(s.bytes),
             s.bytes,
-            s.seconds,
             s.content_hash,
             s.input_hash
         );
-        if scene.report.dropped_degenerate + scene.report.skipped_points + scene.report.skipped_lines > 0 {
+        let r = &out.import;
+        if r.dropped_degenerate + r.skipped_points + r.skipped_lines > 0 {
             text.push_str(&format!(
                 "\n  dropped {} degenerate triangles; skipped {} point and {} line primitives",
-                scene.report.dropped_degenerate, scene.report.skipped_points, scene.report.skipped_lines
+                r.dropped_degenerate, r.skipped_points, r.skipped_lines
             ));
         }
         stdout_line(&text)?;
     }
     Ok(())
+}
+
+fn merge(a: &MergeArgs) -> Result<()> {
+    let (cache, cache_note) = a.cache.resolve(a.quiet);
+    let bar = Bar::new(a.quiet || a.json);
+    let out = vlf_bake::job::merge_job(&a.parts, &a.output, cache, cache_note, &bar)?;
+    if !a.quiet {
+        for w in &out.warnings {
+            eprintln!("warning: {w}");
+        }
+    }
+    if let Some(path) = &a.report {
+        out.report.write(path).with_context(|| format!("cannot write the report {}", path.display()))?;
+    }
+    let s = &out.summary;
+    if a.json {
+        stdout_line(&serde_json::to_string(s)?)?;
+    } else if !a.quiet {
+        stdout_line(&format!(
+            "merged {} shards into {}: {} directions × {}² tiles, {} ({} bytes) in {:.2} s\n  content hash {}\n  input hash   {}",
+            s.shards,
+            s.output.display(),
+            s.directions,
+            s.tile_resolution,
+            human_bytes(s.bytes),
+            s.bytes,
+            s.check_seconds + s.copy_seconds,
+            s.content_hash,
+            s.input_hash
+        ))?;
+    }
+    Ok(())
+}
+
+fn cache(a: &CacheArgs) -> Result<()> {
+    let env = std::env::var_os(vlf_bake::cache::CACHE_DIR_ENV).filter(|v| !v.is_empty()).map(PathBuf::from);
+    let Some(dir) = a.cache_dir.clone().or(env) else {
+        bail!("no cache directory: pass --cache-dir DIR or set {}", vlf_bake::cache::CACHE_DIR_ENV)
+    };
+    if !dir.is_dir() {
+        bail!("{} is not a directory", dir.display());
+    }
+    let cache = vlf_bake::cache::Cache::open(&dir)?;
+    match &a.action {
+        CacheAction::List => {
+            let entries = cache.list().with_context(|| format!("cannot list {}", dir.display()))?;
+            if a.json {
+                return stdout_line(&serde_json::to_string_pretty(&entries)?);
+            }
+            let total: u64 = entries.iter().map(|e| e.bytes).sum();
+            let mut text = format!("{} entries, {} in {}", entries.len(), human_bytes(total), dir.display());
+            for e in &entries {
+                let what = match (&e.field, &e.problem) {
+                    (Some(f), _) => format!(
+                        "{} triangles, {} directions × {}² tiles, format {}, from {}",
+                        f.triangles,
+                        f.directions,
+                        f.tile_resolution,
+                        f.format_version,
+                        f.inputs.join(", ")
+                    ),
+                    (None, problem) => format!("unusable: {}", problem.as_deref().unwrap_or("unknown")),
+                };
+                text.push_str(&format!(
+                    "\n  {}  {:>10}  used {} ago  {what}",
+                    &e.key[..16],
+                    human_bytes(e.bytes),
+                    human_duration(e.age_seconds)
+                ));
+            }
+            stdout_line(&text)
+        }
+        CacheAction::Verify => {
+            let outcomes = cache.verify(&mut |_| {}).with_context(|| format!("cannot verify {}", dir.display()))?;
+            let bad: Vec<_> = outcomes.iter().filter(|o| o.problem.is_some()).collect();
+            if a.json {
+                stdout_line(&serde_json::to_string_pretty(&outcomes)?)?;
+            } else {
+                let mut text = format!("{} entries verified, {} bad", outcomes.len(), bad.len());
+                for o in &bad {
+                    text.push_str(&format!("\n  {} removed: {}", o.key, o.problem.as_deref().unwrap_or_default()));
+                }
+                stdout_line(&text)?;
+            }
+            if !bad.is_empty() {
+                bail!("{} of {} cache entries failed verification and were removed", bad.len(), outcomes.len());
+            }
+            Ok(())
+        }
+        CacheAction::Prune { max_size, max_age } => {
+            if max_size.is_none() && max_age.is_none() {
+                bail!("prune needs --max-size or --max-age (or both)");
+            }
+            let r = cache.prune(*max_size, *max_age).with_context(|| format!("cannot prune {}", dir.display()))?;
+            if a.json {
+                return stdout_line(&serde_json::to_string_pretty(&r)?);
+            }
+            stdout_line(&format!(
+                "removed {} entries ({}) and {} stale temporary files; kept {} entries ({})",
+                r.removed.len(),
+                human_bytes(r.removed_bytes),
+                r.stale_temp_files,
+                r.kept,
+                human_bytes(r.kept_bytes)
+            ))
+        }
+    }
+}
+
+/// `3 d`, `5 h`, `12 min`, `40 s`.
+fn human_duration(seconds: f64) -> String {
+    match seconds {
+        s if s >= 86400.0 => format!("{:.0} d", s / 86400.0),
+        s if s >= 3600.0 => format!("{:.0} h", s / 3600.0),
+        s if s >= 60.0 => format!("{:.0} min", s / 60.0),
+        s => format!("{s:.0} s"),
+    }
 }
 
 fn dump(a: &DumpArgs) -> Result<()> {
@@ -565,6 +809,9 @@ fn demo(a: &DemoArgs) -> Result<()> {
         threads: None,
         quiet: false,
         json: false,
+        shard: None,
+        cache: CacheChoice { cache_dir: None, no_cache: true },
+        report: None,
     })?;
     stdout_line(&format!("\n2. dump {} --verify", field_path.display()))?;
     dump(&DumpArgs { field: field_path.clone(), json: false, verify: true, quiet: false })?;

@@ -315,6 +315,7 @@ pub mod codec {
 pub fn kind_name(kind: u32) -> String {
     match SectionKind::from_u32(kind) {
         Some(k) => k.name().to_string(),
+        None if kind == crate::shard::SHARD_KIND => "SHARD".to_string(),
         None => format!("unknown kind {kind}"),
     }
 }

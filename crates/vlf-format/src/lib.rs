@@ -6,7 +6,8 @@
 //!   independent of the file size and hands out typed slices;
 //! - [`writer`]: a writer that places sections in a file in place, each byte written once, with
 //!   big sections streamed or filled while others are written;
-//! - [`verify`]: the full verification behind `vlf-bake dump --verify`.
+//! - [`verify`]: the full verification behind `vlf-bake dump --verify`;
+//! - [`shard`]: the shard files of sharded bakes (`formats/vlf-shard.md`).
 //!
 //! Errors are values ([`FormatError`]), never panics, whatever the input bytes.
 
@@ -16,11 +17,12 @@ compile_error!("vlf-format supports little-endian targets only: the file format 
 pub mod error;
 pub mod layout;
 pub mod reader;
+pub mod shard;
 pub mod verify;
 pub mod writer;
 
 pub use error::{FormatError, hex};
 pub use layout::*;
-pub use reader::{FieldReader, content_hash, read_header_and_table};
+pub use reader::{FieldReader, check_header, check_table, content_hash, read_header_and_table};
 pub use verify::{VerifyReport, verify};
 pub use writer::{FieldFile, HashingWriter, SectionWriter};

@@ -36,11 +36,27 @@ pub struct FieldReader<'a> {
 /// and by tools that must describe a file whose sections cannot be cast (a packed field).
 pub fn read_header_and_table(bytes: &[u8]) -> Result<(&Header, &[SectionEntry]), FormatError> {
     let len = bytes.len() as u64;
-    if bytes.len() < HEADER_SIZE {
+    let header = check_header(bytes, len, &MAGIC)?;
+    let table_end = HEADER_SIZE + header.section_count as usize * TABLE_ENTRY_SIZE;
+    check_table(&bytes[..table_end], len)?;
+    // The header is 8-aligned in any buffer the caller could cast sections from; for the table we
+    // fall back to an error rather than copying, as for sections.
+    let table: &[SectionEntry] = cast_slice(&bytes[HEADER_SIZE..table_end], "section table")?;
+    let header: &Header = &cast_slice::<Header>(&bytes[..HEADER_SIZE], "header")?[0];
+    Ok((header, table))
+}
+
+/// The header checks of §7, in its order, for a container whose magic is `magic` (a field's
+/// [`MAGIC`], or another file type built on the same container, such as a shard): `head` holds at
+/// least the first 128 bytes of a file of `file_length` bytes. On success the section table lies
+/// within the file, at `128 .. 128 + 72 × section_count`; [`check_table`] checks it.
+pub fn check_header(head: &[u8], file_length: u64, magic: &[u8; 8]) -> Result<Header, FormatError> {
+    let len = file_length;
+    if head.len() < HEADER_SIZE {
         return Err(FormatError::TooShort { actual: len, needed: HEADER_SIZE as u64 });
     }
-    let header: Header = bytemuck::pod_read_unaligned(&bytes[..HEADER_SIZE]);
-    if header.magic != MAGIC {
+    let header: Header = bytemuck::pod_read_unaligned(&head[..HEADER_SIZE]);
+    if header.magic != *magic {
         return Err(FormatError::BadMagic { found: header.magic, hint: magic_hint(&header.magic) });
     }
     if header.version_major != VERSION_MAJOR {
@@ -73,15 +89,22 @@ pub fn read_header_and_table(bytes: &[u8]) -> Result<(&Header, &[SectionEntry]),
     if table_end > len {
         return Err(FormatError::TableOutOfBounds { count: header.section_count, end: table_end, file_length: len });
     }
-    let computed = content_hash(&bytes[..table_end as usize]);
-    if computed != header.content_hash {
-        return Err(FormatError::ContentHashMismatch { stored: hex(&header.content_hash), computed: hex(&computed) });
-    }
-    // The header is 8-aligned in any buffer the caller could cast sections from; for the table we
-    // fall back to an error rather than copying, as for sections.
-    let table: &[SectionEntry] = cast_slice(&bytes[HEADER_SIZE..table_end as usize], "section table")?;
-    let header: &Header = &cast_slice::<Header>(&bytes[..HEADER_SIZE], "header")?[0];
+    Ok(header)
+}
 
+/// The rest of §7 for a header that passed [`check_header`]: `head_and_table` is exactly the first
+/// `128 + 72 × section_count` bytes of a file of `file_length` bytes. Checks the content hash,
+/// then every entry (codec, alignment, order, bounds, lengths, element sizes of known kinds,
+/// duplicates) and that the file ends where its last section does. Returns the entries.
+pub fn check_table(head_and_table: &[u8], file_length: u64) -> Result<Vec<SectionEntry>, FormatError> {
+    let len = file_length;
+    let table_end = head_and_table.len() as u64;
+    let stored: [u8; 32] = head_and_table[CONTENT_HASH_RANGE].try_into().expect("32 bytes");
+    let computed = content_hash(head_and_table);
+    if computed != stored {
+        return Err(FormatError::ContentHashMismatch { stored: hex(&stored), computed: hex(&computed) });
+    }
+    let table: Vec<SectionEntry> = bytemuck::pod_collect_to_vec(&head_and_table[HEADER_SIZE..]);
     let mut prev_end = table_end;
     for (index, e) in table.iter().enumerate() {
         let bad = |problem: String| FormatError::BadSection { index, kind: kind_name(e.kind), problem };
@@ -136,7 +159,7 @@ pub fn read_header_and_table(bytes: &[u8]) -> Result<(&Header, &[SectionEntry]),
             what: "the file does not end where its last section ends",
         });
     }
-    Ok((header, table))
+    Ok(table)
 }
 
 impl<'a> FieldReader<'a> {
@@ -285,7 +308,9 @@ pub fn content_hash(header_and_table: &[u8]) -> [u8; 32] {
 
 /// A guess at what damaged or foreign bytes are, for the bad-magic message.
 fn magic_hint(found: &[u8; 8]) -> &'static str {
-    if found[1..4] == MAGIC[1..4] {
+    if *found == crate::shard::SHARD_MAGIC {
+        " (this is a shard of a sharded bake, `vlf-bake bake --shard`: merge the shards into a field with `vlf-bake merge`)"
+    } else if found[1..4] == MAGIC[1..4] {
         if found[0] == MAGIC[0] & 0x7f {
             " (the first byte lost its high bit: the file went through a 7-bit text transfer)"
         } else if found[4..7] == *b"\r\r\n" {

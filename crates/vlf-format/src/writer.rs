@@ -40,6 +40,7 @@ fn write_all_at(file: &File, buf: &[u8], offset: u64) -> io::Result<()> {
 /// A field file being written. See the module documentation.
 pub struct FieldFile {
     file: File,
+    magic: [u8; 8],
     table: Vec<SectionEntry>,
     /// Sections handed out as writers and not yet finished (their table index).
     open: Vec<usize>,
@@ -68,12 +69,18 @@ fn invalid(msg: String) -> io::Error {
 impl FieldFile {
     /// Starts a field in `file` (empty, writable) that will hold `sections` sections.
     pub fn create(file: File, sections: usize) -> io::Result<FieldFile> {
+        FieldFile::create_with_magic(file, sections, MAGIC)
+    }
+
+    /// Starts a file of another type built on the field's container (a shard,
+    /// [`crate::shard::SHARD_MAGIC`]): the same layout with `magic` in the header.
+    pub fn create_with_magic(file: File, sections: usize, magic: [u8; 8]) -> io::Result<FieldFile> {
         if sections > MAX_SECTIONS as usize {
             return Err(invalid(format!("{sections} sections exceed the limit of {MAX_SECTIONS}")));
         }
         file.set_len(0)?;
         let end = (HEADER_SIZE + TABLE_ENTRY_SIZE * sections) as u64;
-        Ok(FieldFile { file, table: Vec::with_capacity(sections), open: Vec::new(), capacity: sections, end })
+        Ok(FieldFile { file, magic, table: Vec::with_capacity(sections), open: Vec::new(), capacity: sections, end })
     }
 
     fn place(&mut self, kind: u32, element_size: u32, length: u64) -> io::Result<(usize, u64)> {
@@ -102,7 +109,16 @@ impl FieldFile {
 
     /// Appends a section from bytes in memory.
     pub fn append(&mut self, kind: SectionKind, bytes: &[u8]) -> io::Result<()> {
-        let (index, offset) = self.place(kind as u32, kind.element_size(), bytes.len() as u64)?;
+        self.append_kind(kind as u32, kind.element_size(), bytes)
+    }
+
+    /// Appends a section of any kind number and element size from bytes in memory (a section this
+    /// crate does not know, carried over from another file, or a shard's SHARD record).
+    pub fn append_kind(&mut self, kind: u32, element_size: u32, bytes: &[u8]) -> io::Result<()> {
+        if element_size == 0 || bytes.len() as u64 % element_size as u64 != 0 {
+            return Err(invalid(format!("section {} is not a whole number of elements", kind_name(kind))));
+        }
+        let (index, offset) = self.place(kind, element_size, bytes.len() as u64)?;
         write_all_at(&self.file, bytes, offset)?;
         self.table[index].raw_hash = *blake3::hash(bytes).as_bytes();
         Ok(())
@@ -134,7 +150,15 @@ impl FieldFile {
     /// Reserves a section of exactly `length` bytes, to be filled through the returned writer
     /// (while other sections are added) and closed with [`FieldFile::finish_section`].
     pub fn reserve(&mut self, kind: SectionKind, length: u64) -> io::Result<SectionWriter> {
-        let (index, offset) = self.place(kind as u32, kind.element_size(), length)?;
+        self.reserve_kind(kind as u32, kind.element_size(), length)
+    }
+
+    /// [`FieldFile::reserve`] for any kind number and element size.
+    pub fn reserve_kind(&mut self, kind: u32, element_size: u32, length: u64) -> io::Result<SectionWriter> {
+        if element_size == 0 {
+            return Err(invalid(format!("section {} has element size 0", kind_name(kind))));
+        }
+        let (index, offset) = self.place(kind, element_size, length)?;
         self.open.push(index);
         self.writer(index, offset, Some(length))
     }
@@ -159,8 +183,9 @@ impl FieldFile {
         })
     }
 
-    /// Closes a section opened with [`FieldFile::reserve`] or [`FieldFile::stream`].
-    pub fn finish_section(&mut self, mut w: SectionWriter) -> io::Result<()> {
+    /// Closes a section opened with [`FieldFile::reserve`] or [`FieldFile::stream`] and returns the
+    /// BLAKE3 of the bytes written to it.
+    pub fn finish_section(&mut self, mut w: SectionWriter) -> io::Result<[u8; 32]> {
         w.flush_buf()?;
         let pos = self.open.iter().position(|&i| i == w.index).ok_or_else(|| invalid("section is not open".into()))?;
         self.open.swap_remove(pos);
@@ -182,7 +207,7 @@ impl FieldFile {
             return Err(invalid(format!("section {} is not a whole number of elements", kind_name(e.kind))));
         }
         e.raw_hash = *w.hasher.finalize().as_bytes();
-        Ok(())
+        Ok(e.raw_hash)
     }
 
     /// Writes the section table and the header (with the content hash and `input_hash`) and
@@ -200,7 +225,7 @@ impl FieldFile {
         // make sure the length is right even if the last section was empty.
         self.file.set_len(self.end)?;
         let mut header = Header {
-            magic: MAGIC,
+            magic: self.magic,
             version_major: VERSION_MAJOR,
             version_minor: VERSION_MINOR,
             header_size: HEADER_SIZE as u32,
