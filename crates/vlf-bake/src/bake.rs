@@ -25,8 +25,9 @@ use vlf_geom::Lattice;
 use vlf_geom::frame::{frame, mul};
 
 /// Bumped whenever the baker's output for the same inputs and request changes (part of the input
-/// hash, `formats/vlf.md` §3.2).
-pub const BAKER_REVISION: u32 = 1;
+/// hash, `formats/vlf.md` §3.2). Revision 2 (format 1.1) adds the MATERIALS, CAMERAS and LIGHTS
+/// sections, and with them what an OBJ's `.mtl` files hold, to the input hash.
+pub const BAKER_REVISION: u32 = 2;
 
 /// The conservative margin as a fraction of the bounding radius (`formats/vlf.md` §6.2).
 pub const MARGIN_FRACTION: f64 = 1.0 / (1u64 << 20) as f64;
@@ -373,21 +374,25 @@ pub fn input_hash(scene: &Scene, request: &Request) -> [u8; 32] {
     h.update(&VERSION_MAJOR.to_le_bytes());
     h.update(&BAKER_REVISION.to_le_bytes());
     h.update(bytemuck::bytes_of(request));
-    for bytes in scene_sections(scene) {
+    for (_, bytes) in scene_sections(scene) {
         h.update(&(bytes.len() as u64).to_le_bytes());
         h.update(bytes);
     }
     *h.finalize().as_bytes()
 }
 
-/// Raw bytes of TRIANGLES, PROVENANCE, SOURCES, INPUTS, STRINGS, in that order.
-fn scene_sections(scene: &Scene) -> [&[u8]; 5] {
+/// Raw bytes of TRIANGLES, PROVENANCE, SOURCES, INPUTS, STRINGS, MATERIALS, CAMERAS, LIGHTS, in
+/// that order (the order of the input hash; the last three are empty when the inputs define none).
+fn scene_sections(scene: &Scene) -> [(SectionKind, &[u8]); 8] {
     [
-        bytemuck::cast_slice(&scene.triangles),
-        bytemuck::cast_slice(&scene.provenance),
-        bytemuck::cast_slice(&scene.sources),
-        bytemuck::cast_slice(&scene.inputs),
-        &scene.strings,
+        (SectionKind::Triangles, bytemuck::cast_slice(&scene.triangles)),
+        (SectionKind::Provenance, bytemuck::cast_slice(&scene.provenance)),
+        (SectionKind::Sources, bytemuck::cast_slice(&scene.sources)),
+        (SectionKind::Inputs, bytemuck::cast_slice(&scene.inputs)),
+        (SectionKind::Strings, &scene.strings),
+        (SectionKind::Materials, bytemuck::cast_slice(&scene.materials)),
+        (SectionKind::Cameras, bytemuck::cast_slice(&scene.cameras)),
+        (SectionKind::Lights, bytemuck::cast_slice(&scene.lights)),
     ]
 }
 
@@ -471,22 +476,22 @@ pub fn bake_to_path(
     };
     let hash = input_hash(scene, request);
 
-    let tmp = AtomicFile::create(output).map_err(io_err)?;
-    let mut f = FieldFile::create(tmp.file().try_clone().map_err(io_err)?, SectionKind::ALL.len()).map_err(io_err)?;
-    let [tri_bytes, prov_bytes, src_bytes, input_bytes, string_bytes] = scene_sections(scene);
-    let small_sections = [
+    // The required sections, then the optional ones (§4) that are not empty.
+    let small: Vec<(SectionKind, &[u8])> = [
         (SectionKind::Scene, bytemuck::bytes_of(&scene_record)),
         (SectionKind::Params, bytemuck::bytes_of(&params_record)),
         (SectionKind::Directions, bytemuck::cast_slice(&dir_records)),
         (SectionKind::Rotations, bytemuck::cast_slice(&rotations)),
         (SectionKind::Lookup, bytemuck::cast_slice(&lookup)),
-        (SectionKind::Triangles, tri_bytes),
-        (SectionKind::Provenance, prov_bytes),
-        (SectionKind::Sources, src_bytes),
-        (SectionKind::Inputs, input_bytes),
-        (SectionKind::Strings, string_bytes),
-    ];
-    for (kind, bytes) in small_sections {
+    ]
+    .into_iter()
+    .chain(scene_sections(scene).into_iter().filter(|(kind, bytes)| kind.is_required() || !bytes.is_empty()))
+    .collect();
+    // The small sections plus BEAMS, STATISTICS, TILES, TRIANGLE_IDS and LEAF_BOUNDS.
+    let section_count = small.len() + 5;
+    let tmp = AtomicFile::create(output).map_err(io_err)?;
+    let mut f = FieldFile::create(tmp.file().try_clone().map_err(io_err)?, section_count).map_err(io_err)?;
+    for &(kind, bytes) in &small {
         f.append(kind, bytes).map_err(io_err)?;
     }
     // Explicit parameters are held to --max-bytes as a ceiling (automatic ones were chosen to fit
@@ -494,8 +499,8 @@ pub fn bake_to_path(
     // every section whose size is known now, without padding, so the running check never fires
     // early; the exact length is checked once the file is complete.
     let ceiling = if choice.automatic { u64::MAX } else { request.max_bytes };
-    let fixed = (vlf_format::HEADER_SIZE + vlf_format::TABLE_ENTRY_SIZE * SectionKind::ALL.len()) as u64
-        + small_sections.iter().map(|(_, b)| b.len() as u64).sum::<u64>()
+    let fixed = (vlf_format::HEADER_SIZE + vlf_format::TABLE_ENTRY_SIZE * section_count) as u64
+        + small.iter().map(|(_, b)| b.len() as u64).sum::<u64>()
         + l as u64 * (size_of::<BeamRecord>() as u64 + n2 * size_of::<TileRecord>() as u64)
         + size_of::<StatisticsRecord>() as u64;
     let over_budget = |at_least: u64, baked: usize| BakeError::OverBudget { ceiling, at_least, baked, directions: l };

@@ -415,6 +415,10 @@ fn describe_text(d: &inspect::Description) -> String {
     for i in &d.inputs {
         line(format!("  input         {} ({} triangles, blake3 {})", i.name, i.triangles, &i.file_hash[..16]));
     }
+    line(format!(
+        "  rendering     {} materials, {} cameras, {} lights ({} sources)",
+        d.materials, d.cameras, d.lights, d.sources
+    ));
     line("parameters".into());
     let req = |v: Option<u32>| v.map_or("automatic".to_string(), |v| format!("requested {v}"));
     line(format!(

@@ -6,7 +6,7 @@
 //! and that nothing it printed contains "panicked". Bakes use small explicit parameters
 //! ([`SMALL`]) so each takes a few hundredths of a second.
 
-use serde_json::Value;
+use serde_json::{Value, json};
 use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
@@ -21,7 +21,7 @@ const SMALL: [&str; 4] = ["--directions", "33", "--tiles", "16"];
 const BUNNY_TRIANGLES: u64 = 3674;
 const BOX_TRIANGLES: u64 = 12;
 
-/// The sections of a version 1.0 field (`formats/vlf.md` §5).
+/// The sections every version 1 field holds (`formats/vlf.md` §5); the bunny has no others.
 const SECTION_NAMES: [&str; 15] = [
     "SCENE",
     "PARAMS",
@@ -360,7 +360,8 @@ fn dump_json_has_the_documented_keys_and_agrees_with_the_library() {
     assert!(j.get("verify").is_none(), "no verify object without --verify");
 
     let field = Field::open(&field_path).unwrap();
-    assert_eq!(j["format_version"], "1.0");
+    assert_eq!(j["format_version"], "1.1");
+    assert_eq!((&j["materials"], &j["cameras"], &j["lights"]), (&json!(0), &json!(0), &json!(0)), "{j}");
     assert_eq!(j["content_hash"], hex(&field.content_hash()));
     assert_eq!(j["input_hash"], hex(&field.input_hash()));
     assert_eq!(j["triangle_count"], field.triangle_count());
@@ -400,7 +401,8 @@ fn dump_text_describes_the_field_and_names_every_section() {
     let r = vlf(&["dump", s(&field_path)]).ok();
     assert_eq!(r.stderr, "");
     let field = Field::open(&field_path).unwrap();
-    assert!(r.stdout.starts_with("VLF field, format 1.0"), "{}", r.stdout);
+    assert!(r.stdout.starts_with("VLF field, format 1.1"), "{}", r.stdout);
+    assert!(r.stdout.contains("0 materials, 0 cameras, 0 lights"), "{}", r.stdout);
     assert!(r.stdout.contains(&hex(&field.content_hash())), "{}", r.stdout);
     assert!(r.stdout.contains(&format!("{BUNNY_TRIANGLES}")), "{}", r.stdout);
     for name in SECTION_NAMES {
