@@ -199,9 +199,9 @@ fn a_flipped_byte_in_the_rendering_sections_is_caught() {
 }
 
 /// Records full of junk (and hashes that agree, as a careless writer would make them): the
-/// accessors answer something and never panic.
+/// accessors and the renderer answer something and never panic.
 #[test]
-fn lying_records_never_make_the_runtime_panic() {
+fn lying_records_never_make_the_runtime_or_the_renderer_panic() {
     let bytes = field_bytes();
     let mut rng = vlf_bake::generate::Rng::new(3);
     for round in 0..40 {
@@ -222,6 +222,16 @@ fn lying_records_never_make_the_runtime_panic() {
         for prim in 0..14 {
             let _ = field.material(prim);
         }
-        let _ = field.materials().count() + field.cameras().count() + field.lights().count();
+        let cameras: Vec<_> = field.cameras().collect();
+        let lights: Vec<_> = field.lights().filter_map(|l| vlf_render::Light::from_scene_light(&l)).collect();
+        let scene = vlf_render::Scene::from_field(&field, &vlf_render::SceneOptions::default());
+        let settings = vlf_render::Settings { width: 12, height: 9, samples: 1, ..Default::default() };
+        let (center, radius) = field.bounding_sphere();
+        let view = cameras
+            .first()
+            .and_then(|c| vlf_render::View::from_scene_camera(c, 12.0 / 9.0))
+            .unwrap_or_else(|| vlf_render::View::outside(center, radius, 12.0 / 9.0));
+        let frame = vlf_render::render(&field, &scene, &view, &lights, &settings, &|_| {});
+        let _ = vlf_render::to_srgb8(&frame, 1.0);
     }
 }
