@@ -106,11 +106,11 @@ impl Light {
 /// A key light above and to the left of the camera and a dimmer fill to its right, so that any
 /// scene is lit from the side it is seen from. The lights sit at the scale of the view's reach:
 /// the distance to the centre of the scene's bounding sphere (`center`, `radius`) from outside it,
-/// half its radius from inside. Strengths give an irradiance of about 1 (key) and 0.3 (fill) at
+/// a fifth of its radius from inside (close to the eye, where little stands in the way). Strengths give an irradiance of about 1 (key) and 0.3 (fill) at
 /// that distance in front of the camera.
 pub fn default_lights(view: &View, center: V3, radius: f64) -> Vec<Light> {
     let to_center = length(sub(center, view.eye));
-    let reach = if to_center > radius { to_center } else { 0.5 * radius };
+    let reach = if to_center > radius { to_center } else { 0.2 * radius };
     let target = madd(view.eye, view.forward, reach);
     let place = |right: f64, up: f64, back: f64| {
         madd(madd(madd(view.eye, view.right, right * reach), view.up, up * reach), view.forward, -back * reach)
