@@ -208,7 +208,7 @@ struct RenderArgs {
     /// Ignore the field's glTF lights: light the scene with a key and a fill light around the camera.
     #[arg(long)]
     default_lights: bool,
-    /// Reflection and refraction bounces after the primary ray.
+    /// Reflection and refraction bounces after the primary ray (at most 64).
     #[arg(long, default_value_t = 5)]
     max_depth: u32,
     /// Samples per pixel along each axis (2 = 4 rays per pixel, antialiased).
@@ -706,6 +706,9 @@ fn render(a: &RenderArgs) -> Result<()> {
     }
     if a.samples == 0 || a.samples > 16 {
         bail!("--samples must be between 1 and 16 (it is per axis: 16 = 256 rays per pixel)");
+    }
+    if a.max_depth > vlf_render::MAX_BOUNCES {
+        bail!("--max-depth must be at most {}", vlf_render::MAX_BOUNCES);
     }
     if !(a.fov > 0.0 && a.fov < 180.0) {
         bail!("--fov must be between 0 and 180 degrees");

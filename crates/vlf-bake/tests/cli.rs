@@ -1065,6 +1065,7 @@ fn render_refuses_bad_flags_with_a_clear_message() {
         (&["--eye", "1,2"][..], 2, "expected 3"),
         (&["--light", "0,0,0,-1"][..], 2, "intensity"),
         (&["--samples", "0"][..], 1, "--samples"),
+        (&["--max-depth", "65"][..], 1, "--max-depth"),
         (&["--width", "0"][..], 1, "--width"),
         (&["--fov", "200", "--eye", "0,0,30"][..], 1, "--fov"),
         (&["--view", "inside", "--camera", "0"][..], 2, "cannot be used with"),

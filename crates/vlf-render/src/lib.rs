@@ -42,7 +42,7 @@ mod view;
 pub use image::{WorkImage, WorkMetric, decode_png, encode_png, inferno, to_srgb8, work_image};
 pub use light::{Emitter, Light, default_lights};
 pub use math::V3;
-pub use render::{Background, Frame, RayCounts, Settings, render};
+pub use render::{Background, Frame, MAX_BOUNCES, RayCounts, Settings, render};
 pub use scene::{Scene, SceneOptions, Surface};
 pub use tracer::Tracer;
 pub use view::View;

@@ -49,7 +49,7 @@ pub struct Settings {
     pub height: u32,
     /// Samples per pixel along each axis: `samples²` rays on a regular grid within each pixel.
     pub samples: u32,
-    /// Reflection and refraction bounces after the primary ray.
+    /// Reflection and refraction bounces after the primary ray; at most [`MAX_BOUNCES`].
     pub max_depth: u32,
     /// Ambient light: irradiance every surface receives unshadowed.
     pub ambient: f64,
@@ -95,6 +95,10 @@ pub struct Frame {
     pub rays: RayCounts,
     pub total_work: TraceStats,
 }
+
+/// The largest `max_depth` honoured: rays are traced by recursion, and facing mirrors or total
+/// internal reflection keep a ray's weight up, so the depth alone bounds the stack.
+pub const MAX_BOUNCES: u32 = 64;
 
 /// Rays whose weight falls below this (per colour channel) are not traced.
 const MIN_WEIGHT: f64 = 1.0 / 512.0;
@@ -164,7 +168,7 @@ impl<T: Tracer + ?Sized> Tracing<'_, T> {
             colour = add(colour, mul(local, inc.irradiance));
         }
 
-        if depth >= self.settings.max_depth {
+        if depth >= self.settings.max_depth.min(MAX_BOUNCES) {
             return colour;
         }
         let mut kr = s.reflection;
