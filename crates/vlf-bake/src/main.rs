@@ -177,6 +177,7 @@ struct RenderArgs {
     /// The PNG to write.
     #[arg(short, long, value_name = "IMAGE.png")]
     output: PathBuf,
+    /// Image width in pixels.
     #[arg(long, default_value_t = 640)]
     width: u32,
     /// Image height (default: from the width and the field camera's aspect ratio, else 480).
