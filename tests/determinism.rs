@@ -65,3 +65,23 @@ fn golden_bunny_field() {
     expect("bunny-129x32.content-hash", &format!("{}\n", hex(&field.content_hash())));
     expect("bunny-129x32.dump.json", &(serde_json::to_string_pretty(&info).unwrap() + "\n"));
 }
+
+/// A field with every section of format 1.1: the glTF room's materials, camera and lights.
+#[test]
+fn golden_cornell_field() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("cornell.vlf");
+    let scene = import::import_paths(&[fixtures().join("meshes/cornell/cornell.gltf")]).unwrap();
+    let config = BakeConfig {
+        directions: Some(33),
+        tiles: Some(16),
+        depth: DepthPolicy { leaf_size: 4, max_depth: 8 },
+        ..BakeConfig::default()
+    };
+    vlf_bake::bake_scene(&scene, &config, &path, &NoProgress).unwrap();
+    let field = Field::open(&path).unwrap();
+    let info = vlf_bake::inspect::describe(field.reader());
+    assert_eq!((info.materials, info.cameras, info.lights), (7, 1, 2));
+    expect("cornell-33x16.content-hash", &format!("{}\n", hex(&field.content_hash())));
+    expect("cornell-33x16.dump.json", &(serde_json::to_string_pretty(&info).unwrap() + "\n"));
+}

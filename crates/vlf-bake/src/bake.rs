@@ -28,8 +28,9 @@ use vlf_geom::Lattice;
 use vlf_geom::frame::{frame, mul};
 
 /// Bumped whenever the baker's output for the same inputs and request changes (part of the input
-/// hash, `formats/vlf.md` §3.2).
-pub const BAKER_REVISION: u32 = 1;
+/// hash, `formats/vlf.md` §3.2). Revision 2 (format 1.1) adds the MATERIALS, CAMERAS and LIGHTS
+/// sections, and with them what an OBJ's `.mtl` files hold, to the input hash.
+pub const BAKER_REVISION: u32 = 2;
 
 /// The conservative margin as a fraction of the bounding radius (`formats/vlf.md` §6.2).
 pub const MARGIN_FRACTION: f64 = 1.0 / (1u64 << 20) as f64;
@@ -376,22 +377,25 @@ pub fn input_hash(scene: &Scene, request: &Request) -> [u8; 32] {
     h.update(&VERSION_MAJOR.to_le_bytes());
     h.update(&BAKER_REVISION.to_le_bytes());
     h.update(bytemuck::bytes_of(request));
-    for bytes in input_sections(scene) {
+    for (_, bytes) in input_sections(scene) {
         h.update(&(bytes.len() as u64).to_le_bytes());
         h.update(bytes);
     }
     *h.finalize().as_bytes()
 }
 
-/// Raw bytes of TRIANGLES, PROVENANCE, SOURCES, INPUTS, STRINGS, in that order: what the input
-/// hash covers.
-fn input_sections(scene: &Scene) -> [&[u8]; 5] {
+/// Raw bytes of TRIANGLES, PROVENANCE, SOURCES, INPUTS, STRINGS, MATERIALS, CAMERAS, LIGHTS, in
+/// that order: what the input hash covers (the last three are empty when the inputs define none).
+fn input_sections(scene: &Scene) -> [(SectionKind, &[u8]); 8] {
     [
-        bytemuck::cast_slice(&scene.triangles),
-        bytemuck::cast_slice(&scene.provenance),
-        bytemuck::cast_slice(&scene.sources),
-        bytemuck::cast_slice(&scene.inputs),
-        &scene.strings,
+        (SectionKind::Triangles, bytemuck::cast_slice(&scene.triangles)),
+        (SectionKind::Provenance, bytemuck::cast_slice(&scene.provenance)),
+        (SectionKind::Sources, bytemuck::cast_slice(&scene.sources)),
+        (SectionKind::Inputs, bytemuck::cast_slice(&scene.inputs)),
+        (SectionKind::Strings, &scene.strings),
+        (SectionKind::Materials, bytemuck::cast_slice(&scene.materials)),
+        (SectionKind::Cameras, bytemuck::cast_slice(&scene.cameras)),
+        (SectionKind::Lights, bytemuck::cast_slice(&scene.lights)),
     ]
 }
 
@@ -431,7 +435,8 @@ pub const PARAMETER_KINDS: [SectionKind; 4] =
     [SectionKind::Params, SectionKind::Directions, SectionKind::Rotations, SectionKind::Lookup];
 
 /// The shared sections that depend on the scene alone, in file order: SCENE, then TRIANGLES,
-/// PROVENANCE, SOURCES, INPUTS, STRINGS. A new section derived from the inputs goes here, so that
+/// PROVENANCE, SOURCES, INPUTS, STRINGS and the optional MATERIALS, CAMERAS, LIGHTS when the
+/// inputs define any. A new section derived from the inputs goes here, so that
 /// fields, shards, merges and the cache key all carry it.
 pub fn scene_sections<'a>(prep: &Prepared<'a>) -> Vec<SharedSection<'a>> {
     let scene = prep.scene;
@@ -446,15 +451,15 @@ pub fn scene_sections<'a>(prep: &Prepared<'a>) -> Vec<SharedSection<'a>> {
         dropped_degenerate: scene.report.dropped_degenerate,
         reserved: [0; 3],
     };
-    let [tri_bytes, prov_bytes, src_bytes, input_bytes, string_bytes] = input_sections(scene);
-    vec![
-        SharedSection::new(SectionKind::Scene, bytemuck::bytes_of(&record).to_vec()),
-        SharedSection::new(SectionKind::Triangles, tri_bytes),
-        SharedSection::new(SectionKind::Provenance, prov_bytes),
-        SharedSection::new(SectionKind::Sources, src_bytes),
-        SharedSection::new(SectionKind::Inputs, input_bytes),
-        SharedSection::new(SectionKind::Strings, string_bytes),
-    ]
+    // The optional sections (MATERIALS, CAMERAS, LIGHTS) are written only when not empty.
+    std::iter::once(SharedSection::new(SectionKind::Scene, bytemuck::bytes_of(&record).to_vec()))
+        .chain(
+            input_sections(scene)
+                .into_iter()
+                .filter(|(kind, bytes)| kind.is_required() || !bytes.is_empty())
+                .map(|(kind, bytes)| SharedSection::new(kind, bytes)),
+        )
+        .collect()
 }
 
 /// The shared sections computed from the chosen parameters ([`PARAMETER_KINDS`]), in file order.

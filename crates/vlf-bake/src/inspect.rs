@@ -54,6 +54,10 @@ pub struct Description {
     pub statistics: Statistics,
     pub inputs: Vec<InputInfo>,
     pub sources: usize,
+    /// Records in MATERIALS, CAMERAS and LIGHTS (format 1.1; 0 when absent).
+    pub materials: usize,
+    pub cameras: usize,
+    pub lights: usize,
     pub sections: Vec<SectionInfo>,
 }
 
@@ -112,6 +116,9 @@ pub fn describe(r: &FieldReader<'_>) -> Description {
         statistics: Statistics::from_record(r.statistics),
         inputs,
         sources: r.sources.len(),
+        materials: r.materials.len(),
+        cameras: r.cameras.len(),
+        lights: r.lights.len(),
         sections,
     }
 }

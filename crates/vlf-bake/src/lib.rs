@@ -24,7 +24,7 @@ pub mod shard;
 
 pub use bake::{BAKER_REVISION, BakeError, BakeSummary, NoProgress, Prepared, Progress, Statistics, input_hash};
 pub use params::{BakeConfig, Choice, DepthPolicy, Params, choose};
-pub use scene::{ImportError, ImportReport, Scene, SceneBuilder, SourceDesc};
+pub use scene::{ImportError, ImportReport, MaterialDesc, Scene, SceneBuilder, SourceDesc};
 
 /// Chooses parameters for `config` and bakes `scene` into `output` (atomically).
 pub fn bake_scene(

@@ -1,6 +1,6 @@
-//! `vlf-bake`: bake triangle meshes into visibility-field files, inspect and verify them, and
-//! trace batches of rays against them. A thin layer over the `vlf_bake` and `vlf_runtime`
-//! libraries.
+//! `vlf-bake`: bake triangle meshes into visibility-field files, inspect and verify them, trace
+//! batches of rays against them and render pictures of them. A thin layer over the `vlf_bake`,
+//! `vlf_runtime` and `vlf_render` libraries.
 //!
 //! Exit codes: 0 success; 1 the command failed (one line on standard error says why); 2 the
 //! command line was invalid. A closed output pipe (`vlf-bake dump f | head`) counts as success.
@@ -24,7 +24,7 @@ use vlf_runtime::{Field, Hit, Ray};
     about = "Bake triangle meshes into visibility fields that load instantly, and inspect, verify and trace them.",
     long_about = "Bake triangle meshes (OBJ, glTF, GLB) into a visibility field: a precomputed, memory-mappable \
 ray-tracing acceleration structure (Mortensen et al., \"A Visibility Field for Ray Tracing\"). A field is one \
-versioned, content-hashed file; bakes are reproducible to the byte.\n\nTypical use:\n  vlf-bake bake scene.glb -o scene.vlf\n  vlf-bake dump scene.vlf --verify\n  vlf-bake rays scene.vlf -o rays.bin && vlf-bake trace scene.vlf --rays rays.bin --out hits.bin --json"
+versioned, content-hashed file; bakes are reproducible to the byte.\n\nTypical use:\n  vlf-bake bake scene.glb -o scene.vlf\n  vlf-bake dump scene.vlf --verify\n  vlf-bake render scene.vlf -o scene.png\n  vlf-bake rays scene.vlf -o rays.bin && vlf-bake trace scene.vlf --rays rays.bin --out hits.bin --json"
 )]
 struct Cli {
     #[command(subcommand)]
@@ -45,17 +45,20 @@ enum Command {
     Trace(TraceArgs),
     /// Write a rays file of primary rays for a camera that frames a field's scene.
     Rays(RaysArgs),
+    /// Render a picture of a field: Whitted ray tracing with shadows, mirrors and glass.
+    Render(Box<RenderArgs>),
     /// Generate a test scene (the paper's random triangles, grids, slivers) as OBJ.
     Gen(GenArgs),
-    /// Bake the bundled bunny, dump and verify it, and trace a frame from outside and inside.
+    /// Bake the bundled bunny in a room, dump and verify it, trace frames and render a picture.
     Demo(DemoArgs),
 }
 
 #[derive(Args)]
 struct DemoArgs {
-    /// The mesh to bake (default: the bunny in the repository's fixtures).
+    /// The meshes to bake, repeatable (default: the bunny in the repository's fixtures, in the
+    /// Cornell-like room whose glTF brings a camera and lights).
     #[arg(long, value_name = "MESH")]
-    input: Option<PathBuf>,
+    input: Vec<PathBuf>,
     /// Where to write the field, rays and hits.
     #[arg(long, default_value = "target/vlf-demo", value_name = "DIR")]
     output_dir: PathBuf,
@@ -256,6 +259,95 @@ struct RaysArgs {
 }
 
 #[derive(Clone, Copy, ValueEnum)]
+enum WorkArg {
+    /// Ray/triangle tests.
+    Tests,
+    /// Tiles visited.
+    Tiles,
+    /// BSP leaves visited.
+    Leaves,
+    /// Rays traced.
+    Rays,
+}
+
+#[derive(Args)]
+struct RenderArgs {
+    /// The field file.
+    field: PathBuf,
+    /// The PNG to write.
+    #[arg(short, long, value_name = "IMAGE.png")]
+    output: PathBuf,
+    /// Image width in pixels.
+    #[arg(long, default_value_t = 640)]
+    width: u32,
+    /// Image height (default: from the width and the field camera's aspect ratio, else 480).
+    #[arg(long)]
+    height: Option<u32>,
+    /// Frame the whole scene from outside, or look across it from inside (like `rays --view`).
+    /// Default: the field's first glTF camera if it has one, else outside.
+    #[arg(long, value_enum, conflicts_with_all = ["camera", "eye"])]
+    view: Option<View>,
+    /// Use the field's glTF camera number N (0 = first; `dump` counts them).
+    #[arg(long, value_name = "N", conflicts_with = "eye")]
+    camera: Option<usize>,
+    /// Place a pinhole camera at X,Y,Z.
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3, allow_hyphen_values = true)]
+    eye: Option<[f64; 3]>,
+    /// The point an --eye camera looks at (default: the centre of the scene).
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3, allow_hyphen_values = true, requires = "eye")]
+    target: Option<[f64; 3]>,
+    /// The up direction of an --eye camera.
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3, default_value = "0,1,0", allow_hyphen_values = true)]
+    up: [f64; 3],
+    /// Vertical field of view of an --eye camera, in degrees.
+    #[arg(long, default_value_t = 50.0, value_name = "DEGREES")]
+    fov: f64,
+    /// A white point light at X,Y,Z with intensity I (irradiance I/d²); repeatable. Replaces the
+    /// field's lights and the default key and fill lights.
+    #[arg(long = "light", value_name = "X,Y,Z,I", value_parser = parse_light, allow_hyphen_values = true)]
+    lights: Vec<[f64; 4]>,
+    /// Ignore the field's glTF lights: light the scene with a key and a fill light around the camera.
+    #[arg(long)]
+    default_lights: bool,
+    /// Reflection and refraction bounces after the primary ray (at most 64).
+    #[arg(long, default_value_t = 5)]
+    max_depth: u32,
+    /// Samples per pixel along each axis (2 = 4 rays per pixel, antialiased).
+    #[arg(long, default_value_t = 2)]
+    samples: u32,
+    /// Multiply the image's brightness.
+    #[arg(long, default_value_t = 1.0)]
+    exposure: f64,
+    /// Unshadowed light every surface receives.
+    #[arg(long, default_value_t = 0.06)]
+    ambient: f64,
+    /// A solid background colour R,G,B (linear, 0 to 1) instead of the sky gradient.
+    #[arg(long, value_name = "R,G,B", value_parser = parse_vec3)]
+    background: Option<[f64; 3]>,
+    /// Flat shading: no normals interpolated across edges.
+    #[arg(long)]
+    flat: bool,
+    /// Also write a false-colour picture of the work per pixel (black = none, white = --work-max or more).
+    #[arg(long, value_name = "IMAGE.png")]
+    work_image: Option<PathBuf>,
+    /// What the work picture shows, summed over every ray of the pixel.
+    #[arg(long, value_enum, default_value = "tests")]
+    work: WorkArg,
+    /// The work at the top of the colour scale (default: the 99th percentile of the frame).
+    #[arg(long, value_name = "COUNT")]
+    work_max: Option<u64>,
+    /// Worker threads (default: RAYON_NUM_THREADS, else all cores). The picture does not depend on it.
+    #[arg(long, value_name = "T")]
+    threads: Option<usize>,
+    /// No progress bar and no summary on success.
+    #[arg(short, long)]
+    quiet: bool,
+    /// Print the summary as one JSON object.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
 enum SceneKind {
     /// The paper's scene: triangles with centres uniform in [-1,1]³, vertices within ±size of the centre.
     Random,
@@ -306,6 +398,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Dump(a) => dump(&a),
         Command::Trace(a) => with_threads(a.threads, || trace(&a)),
         Command::Rays(a) => rays(&a),
+        Command::Render(a) => with_threads(a.threads, || render(&a)),
         Command::Gen(a) => gen_scene(&a),
         Command::Demo(a) => demo(&a),
     }
@@ -346,6 +439,33 @@ fn parse_size(s: &str) -> Result<u64, String> {
         return Err(format!("`{s}` is not a positive size"));
     }
     Ok(bytes as u64)
+}
+
+/// Parses `x,y,z`.
+fn parse_vec3(s: &str) -> Result<[f64; 3], String> {
+    let v = parse_numbers(s, 3)?;
+    Ok([v[0], v[1], v[2]])
+}
+
+/// Parses `x,y,z,intensity`.
+fn parse_light(s: &str) -> Result<[f64; 4], String> {
+    let v = parse_numbers(s, 4)?;
+    if v[3] < 0.0 {
+        return Err(format!("`{s}`: the intensity must not be negative"));
+    }
+    Ok([v[0], v[1], v[2], v[3]])
+}
+
+fn parse_numbers(s: &str, count: usize) -> Result<Vec<f64>, String> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|p| p.trim().parse::<f64>().ok().filter(|x| x.is_finite()))
+        .collect::<Option<_>>()
+        .ok_or_else(|| format!("`{s}` is not {count} comma-separated numbers"))?;
+    if v.len() != count {
+        return Err(format!("`{s}` has {} numbers, expected {count} separated by commas", v.len()));
+    }
+    Ok(v)
 }
 
 /// A progress bar on standard error, drawn only when it is a terminal and not silenced.
@@ -659,6 +779,10 @@ fn describe_text(d: &inspect::Description) -> String {
     for i in &d.inputs {
         line(format!("  input         {} ({} triangles, blake3 {})", i.name, i.triangles, &i.file_hash[..16]));
     }
+    line(format!(
+        "  rendering     {} materials, {} cameras, {} lights ({} sources)",
+        d.materials, d.cameras, d.lights, d.sources
+    ));
     line("parameters".into());
     let req = |v: Option<u32>| v.map_or("automatic".to_string(), |v| format!("requested {v}"));
     line(format!(
@@ -775,6 +899,235 @@ fn rays(a: &RaysArgs) -> Result<()> {
     Ok(())
 }
 
+/// What `render` prints, and its `--json` keys.
+#[derive(serde::Serialize)]
+struct RenderSummary {
+    output: PathBuf,
+    width: u32,
+    height: u32,
+    samples_per_pixel: u32,
+    camera: String,
+    lights: String,
+    light_count: usize,
+    seconds: f64,
+    rays: RaysSummary,
+    mrays_per_s: f64,
+    work: WorkSummary,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    work_image: Option<WorkImageSummary>,
+    threads: usize,
+}
+
+#[derive(serde::Serialize)]
+struct RaysSummary {
+    primary: u64,
+    shadow: u64,
+    reflection: u64,
+    refraction: u64,
+    total: u64,
+}
+
+#[derive(serde::Serialize)]
+struct WorkSummary {
+    rays_reaching_the_scene: u64,
+    tiles: u64,
+    leaves: u64,
+    triangle_tests: u64,
+}
+
+#[derive(serde::Serialize)]
+struct WorkImageSummary {
+    path: PathBuf,
+    metric: &'static str,
+    scale_max: u64,
+    max: u64,
+    mean: f64,
+}
+
+fn render(a: &RenderArgs) -> Result<()> {
+    use vlf_render::{Background, Light, Scene, SceneOptions, Settings, View as Camera, WorkMetric};
+    if a.width == 0 || a.height == Some(0) {
+        bail!("--width and --height must be positive");
+    }
+    if a.samples == 0 || a.samples > 16 {
+        bail!("--samples must be between 1 and 16 (it is per axis: 16 = 256 rays per pixel)");
+    }
+    if a.max_depth > vlf_render::MAX_BOUNCES {
+        bail!("--max-depth must be at most {}", vlf_render::MAX_BOUNCES);
+    }
+    if !(a.fov > 0.0 && a.fov < 180.0) {
+        bail!("--fov must be between 0 and 180 degrees");
+    }
+    if !(a.exposure.is_finite() && a.exposure > 0.0) {
+        bail!("--exposure must be positive");
+    }
+    if !(a.ambient.is_finite() && a.ambient >= 0.0) {
+        bail!("--ambient must not be negative");
+    }
+    let field = Field::open(&a.field)?;
+    let (center, radius) = field.bounding_sphere();
+    let cameras: Vec<_> = field.cameras().collect();
+
+    // The camera: flags, else the field's, else a framing; the image height follows a field
+    // camera's aspect ratio unless given.
+    let field_camera = match (a.camera, a.view, a.eye) {
+        (Some(n), _, _) => Some(n),
+        (None, None, None) if !cameras.is_empty() => Some(0),
+        _ => None,
+    };
+    let chosen = field_camera
+        .map(|n| {
+            cameras
+                .get(n)
+                .ok_or_else(|| anyhow::anyhow!("--camera {n}: {} has {} camera(s)", a.field.display(), cameras.len()))
+        })
+        .transpose()?;
+    let camera_aspect = chosen.and_then(|c| match c.projection {
+        vlf_runtime::CameraProjection::Perspective { aspect_ratio, .. } => aspect_ratio.map(f64::from),
+        vlf_runtime::CameraProjection::Orthographic { xmag, ymag } => Some(xmag as f64 / ymag as f64),
+    });
+    let height = a.height.unwrap_or_else(|| match camera_aspect {
+        Some(r) if r.is_finite() && r > 0.0 => ((a.width as f64 / r).round() as u32).clamp(1, 1 << 16),
+        _ => 480,
+    });
+    let aspect = a.width as f64 / height as f64;
+    let (view, camera_name) = match (chosen, a.eye) {
+        (Some(c), _) => {
+            let n = field_camera.unwrap_or(0);
+            let view = Camera::from_scene_camera(c, aspect).ok_or_else(|| {
+                anyhow::anyhow!("camera {n} of {} cannot be used: its frame is degenerate", a.field.display())
+            })?;
+            (view, format!("field camera {n} {:?}", c.name))
+        }
+        (None, Some(eye)) => {
+            let target = a.target.unwrap_or(center);
+            if eye == target {
+                bail!("--eye and --target are the same point");
+            }
+            (Camera::look_at(eye, target, a.up, a.fov, aspect), format!("eye {eye:?} looking at {target:?}"))
+        }
+        (None, None) => match a.view.unwrap_or(View::Outside) {
+            View::Outside => (Camera::outside(center, radius, aspect), "outside (framing the scene)".to_string()),
+            View::Inside => (Camera::inside(center, radius, aspect), "inside (across the scene)".to_string()),
+        },
+    };
+
+    let field_lights: Vec<Light> = field.lights().filter_map(|l| Light::from_scene_light(&l)).collect();
+    let (lights, lights_name) = if !a.lights.is_empty() {
+        (a.lights.iter().map(|l| Light::point([l[0], l[1], l[2]], l[3])).collect(), "from --light")
+    } else if !field_lights.is_empty() && !a.default_lights {
+        (field_lights, "the field's")
+    } else {
+        (vlf_render::default_lights(&view, center, radius), "default key and fill")
+    };
+
+    let settings = Settings {
+        width: a.width,
+        height,
+        samples: a.samples,
+        max_depth: a.max_depth,
+        ambient: a.ambient,
+        background: a.background.map_or(Background::Sky, Background::Solid),
+    };
+    let options = SceneOptions { smooth: !a.flat, ..SceneOptions::default() };
+    let scene = Scene::from_field(&field, &options);
+    let bar = Bar::new(a.quiet || a.json);
+    bar.begin("rendering rows", height as u64);
+    let start = Instant::now();
+    let frame = vlf_render::render(field.view(), &scene, &view, &lights, &settings, &|rows| bar.advance(rows));
+    let seconds = start.elapsed().as_secs_f64();
+    bar.end();
+
+    let png = vlf_render::encode_png(frame.width, frame.height, &vlf_render::to_srgb8(&frame, a.exposure))?;
+    vlf_bake::bake::write_atomically(&a.output, |w| w.write_all(&png))
+        .with_context(|| format!("cannot write {}", a.output.display()))?;
+    let work_image = match &a.work_image {
+        None => None,
+        Some(path) => {
+            let metric = match a.work {
+                WorkArg::Tests => WorkMetric::TriangleTests,
+                WorkArg::Tiles => WorkMetric::Cells,
+                WorkArg::Leaves => WorkMetric::Leaves,
+                WorkArg::Rays => WorkMetric::Rays,
+            };
+            let image = vlf_render::work_image(&frame, metric, a.work_max);
+            let png = vlf_render::encode_png(frame.width, frame.height, &image.rgb)?;
+            vlf_bake::bake::write_atomically(path, |w| w.write_all(&png))
+                .with_context(|| format!("cannot write {}", path.display()))?;
+            Some(WorkImageSummary {
+                path: path.clone(),
+                metric: metric.describe(),
+                scale_max: image.scale_max,
+                max: image.max,
+                mean: image.mean,
+            })
+        }
+    };
+    let r = frame.rays;
+    let summary = RenderSummary {
+        output: a.output.clone(),
+        width: frame.width,
+        height: frame.height,
+        samples_per_pixel: a.samples * a.samples,
+        camera: camera_name,
+        lights: lights_name.to_string(),
+        light_count: lights.len(),
+        seconds,
+        rays: RaysSummary {
+            primary: r.primary,
+            shadow: r.shadow,
+            reflection: r.reflection,
+            refraction: r.refraction,
+            total: r.total(),
+        },
+        mrays_per_s: r.total() as f64 / seconds.max(1e-12) / 1e6,
+        work: WorkSummary {
+            rays_reaching_the_scene: frame.total_work.rays,
+            tiles: frame.total_work.cells,
+            leaves: frame.total_work.leaves,
+            triangle_tests: frame.total_work.triangle_tests,
+        },
+        work_image,
+        threads: rayon::current_num_threads(),
+    };
+    if a.json {
+        return stdout_line(&serde_json::to_string(&summary)?);
+    }
+    if a.quiet {
+        return Ok(());
+    }
+    let s = &summary;
+    let mut text = format!(
+        "rendered {} ({}×{}, {} samples per pixel) in {:.2} s: {} rays ({} primary, {} shadow, {} reflected, {} refracted), {:.2} Mrays/s on {} threads\n  camera {}; {} light(s), {}",
+        s.output.display(),
+        s.width,
+        s.height,
+        s.samples_per_pixel,
+        s.seconds,
+        s.rays.total,
+        s.rays.primary,
+        s.rays.shadow,
+        s.rays.reflection,
+        s.rays.refraction,
+        s.mrays_per_s,
+        s.threads,
+        s.camera,
+        s.light_count,
+        s.lights
+    );
+    if let Some(w) = &s.work_image {
+        text.push_str(&format!(
+            "\n  work picture {}: {} per pixel, black = 0 to white = {} (largest {}, mean {:.1})",
+            w.path.display(),
+            w.metric,
+            w.scale_max,
+            w.max,
+            w.mean
+        ));
+    }
+    stdout_line(&text)
+}
+
 fn gen_scene(a: &GenArgs) -> Result<()> {
     let (name, tris) = match a.scene {
         SceneKind::Random => ("random", generate::random_cube(a.count, a.size, a.seed)),
@@ -786,19 +1139,25 @@ fn gen_scene(a: &GenArgs) -> Result<()> {
     Ok(())
 }
 
-/// The bundled default mesh, found through the source tree this binary was built from.
-const DEMO_MESH: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/meshes/bunny.obj");
+/// The bundled default meshes, found through the source tree this binary was built from: the
+/// bunny, and the room around it whose glTF brings materials, a camera and lights.
+const DEMO_MESHES: [&str; 2] = [
+    concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/meshes/cornell/cornell.gltf"),
+    concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/meshes/bunny.obj"),
+];
 
 fn demo(a: &DemoArgs) -> Result<()> {
-    let input = a.input.clone().unwrap_or_else(|| PathBuf::from(DEMO_MESH));
-    if !input.exists() {
-        bail!("demo mesh {} not found; pass --input MESH", input.display());
+    let inputs: Vec<PathBuf> =
+        if a.input.is_empty() { DEMO_MESHES.iter().map(PathBuf::from).collect() } else { a.input.clone() };
+    if let Some(missing) = inputs.iter().find(|i| !i.exists()) {
+        bail!("demo mesh {} not found; pass --input MESH", missing.display());
     }
     std::fs::create_dir_all(&a.output_dir).with_context(|| format!("cannot create {}", a.output_dir.display()))?;
     let field_path = a.output_dir.join("demo.vlf");
-    stdout_line(&format!("1. bake {} (parameters chosen automatically)", input.display()))?;
+    let names: Vec<String> = inputs.iter().map(|i| i.display().to_string()).collect();
+    stdout_line(&format!("1. bake {} (parameters chosen automatically)", names.join(" ")))?;
     bake(&BakeArgs {
-        inputs: vec![input],
+        inputs,
         output: field_path.clone(),
         directions: None,
         tiles: None,
@@ -829,5 +1188,33 @@ fn demo(a: &DemoArgs) -> Result<()> {
             threads: None,
         })?;
     }
-    stdout_line(&format!("\nfiles are in {}", a.output_dir.display()))
+    let picture = a.output_dir.join("demo.png");
+    stdout_line(&format!("\n4. render {} -o {}", field_path.display(), picture.display()))?;
+    render(&RenderArgs {
+        field: field_path,
+        output: picture.clone(),
+        width: 640,
+        height: None,
+        view: None,
+        camera: None,
+        eye: None,
+        target: None,
+        up: [0.0, 1.0, 0.0],
+        fov: 50.0,
+        lights: Vec::new(),
+        default_lights: false,
+        max_depth: 5,
+        samples: 2,
+        exposure: 1.0,
+        ambient: 0.06,
+        background: None,
+        flat: false,
+        work_image: None,
+        work: WorkArg::Tests,
+        work_max: None,
+        threads: None,
+        quiet: false,
+        json: false,
+    })?;
+    stdout_line(&format!("\nfiles are in {}; the picture is {}", a.output_dir.display(), picture.display()))
 }

@@ -1,12 +1,15 @@
 //! The canonical scene a bake consumes: world-space triangles in import order, with provenance.
 //!
 //! Importers feed a [`SceneBuilder`]; it validates every vertex (finite, not huge), drops
-//! zero-area triangles with a count, and records where each kept triangle came from. The bytes of
-//! the resulting [`Scene`] are what the TRIANGLES, PROVENANCE, SOURCES, INPUTS and STRINGS sections
+//! zero-area triangles with a count, and records where each kept triangle came from, plus the
+//! materials, cameras and lights the inputs define. The bytes of the resulting [`Scene`] are what
+//! the TRIANGLES, PROVENANCE, SOURCES, INPUTS, STRINGS, MATERIALS, CAMERAS and LIGHTS sections
 //! hold, and what the input hash covers.
 
 use std::path::PathBuf;
-use vlf_format::{InputRecord, NO_INDEX, ProvenanceRecord, SourceRecord, TriangleRecord};
+use vlf_format::{
+    CameraRecord, InputRecord, LightRecord, MaterialRecord, NO_INDEX, ProvenanceRecord, SourceRecord, TriangleRecord,
+};
 
 /// Coordinates beyond this magnitude are refused: the f32 kernel cannot resolve such scenes, and
 /// products of coordinates would overflow f32.
@@ -69,6 +72,33 @@ impl SourceDesc {
     }
 }
 
+/// A material as an importer describes it, already mapped to the Whitted model of
+/// `formats/vlf.md` §5.10 (linear RGB).
+#[derive(Clone, Debug, PartialEq)]
+pub struct MaterialDesc {
+    pub name: String,
+    pub diffuse: [f32; 3],
+    pub shininess: f32,
+    pub specular: [f32; 3],
+    pub ior: f32,
+    pub reflection: [f32; 3],
+    pub transmission: [f32; 3],
+    pub emission: [f32; 3],
+}
+
+impl MaterialDesc {
+    /// Whether every value lies in the domain §5.10 requires (finite, colours non-negative,
+    /// shininess non-negative, ior positive).
+    pub fn is_valid(&self) -> bool {
+        let colours = [self.diffuse, self.specular, self.reflection, self.transmission, self.emission];
+        colours.iter().flatten().all(|c| c.is_finite() && *c >= 0.0)
+            && self.shininess.is_finite()
+            && self.shininess >= 0.0
+            && self.ior.is_finite()
+            && self.ior > 0.0
+    }
+}
+
 /// Facts about an import that are not errors.
 #[derive(Clone, Debug, Default, PartialEq, Eq, serde::Serialize)]
 pub struct ImportReport {
@@ -90,6 +120,10 @@ pub struct Scene {
     pub sources: Vec<SourceRecord>,
     pub inputs: Vec<InputRecord>,
     pub strings: Vec<u8>,
+    /// Sorted by (input, index), as MATERIALS requires.
+    pub materials: Vec<MaterialRecord>,
+    pub cameras: Vec<CameraRecord>,
+    pub lights: Vec<LightRecord>,
     pub report: ImportReport,
 }
 
@@ -156,6 +190,42 @@ impl SceneBuilder {
             material: desc.material,
         });
         (self.scene.sources.len() - 1) as u32
+    }
+
+    /// Adds material number `index` of input `input` (the value its sources' `material` holds).
+    /// Materials must be added input by input, in increasing index order within an input.
+    pub fn add_material(&mut self, input: u32, index: u32, desc: &MaterialDesc) {
+        debug_assert!(desc.is_valid(), "importers add only valid materials");
+        debug_assert!(self.scene.materials.last().is_none_or(|m| (m.input, m.index) < (input, index)));
+        let (name_offset, name_length) = self.intern(&desc.name);
+        self.scene.materials.push(MaterialRecord {
+            input,
+            index,
+            name_offset,
+            name_length,
+            diffuse: desc.diffuse,
+            shininess: desc.shininess,
+            specular: desc.specular,
+            ior: desc.ior,
+            reflection: desc.reflection,
+            reserved0: 0,
+            transmission: desc.transmission,
+            reserved1: 0,
+            emission: desc.emission,
+            reserved2: 0,
+        });
+    }
+
+    /// Adds a camera; `name` is interned and replaces the record's name fields.
+    pub fn add_camera(&mut self, name: &str, mut camera: CameraRecord) {
+        (camera.name_offset, camera.name_length) = self.intern(name);
+        self.scene.cameras.push(camera);
+    }
+
+    /// Adds a light; `name` is interned and replaces the record's name fields.
+    pub fn add_light(&mut self, name: &str, mut light: LightRecord) {
+        (light.name_offset, light.name_length) = self.intern(name);
+        self.scene.lights.push(light);
     }
 
     /// Adds triangle number `index` of `source`. Refuses non-finite or huge coordinates; drops a

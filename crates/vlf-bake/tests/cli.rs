@@ -6,7 +6,7 @@
 //! and that nothing it printed contains "panicked". Bakes use small explicit parameters
 //! ([`SMALL`]) so each takes a few hundredths of a second.
 
-use serde_json::Value;
+use serde_json::{Value, json};
 use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
@@ -21,7 +21,7 @@ const SMALL: [&str; 4] = ["--directions", "33", "--tiles", "16"];
 const BUNNY_TRIANGLES: u64 = 3674;
 const BOX_TRIANGLES: u64 = 12;
 
-/// The sections of a version 1.0 field (`formats/vlf.md` §5).
+/// The sections every version 1 field holds (`formats/vlf.md` §5); the bunny has no others.
 const SECTION_NAMES: [&str; 15] = [
     "SCENE",
     "PARAMS",
@@ -360,7 +360,8 @@ fn dump_json_has_the_documented_keys_and_agrees_with_the_library() {
     assert!(j.get("verify").is_none(), "no verify object without --verify");
 
     let field = Field::open(&field_path).unwrap();
-    assert_eq!(j["format_version"], "1.0");
+    assert_eq!(j["format_version"], "1.1");
+    assert_eq!((&j["materials"], &j["cameras"], &j["lights"]), (&json!(0), &json!(0), &json!(0)), "{j}");
     assert_eq!(j["content_hash"], hex(&field.content_hash()));
     assert_eq!(j["input_hash"], hex(&field.input_hash()));
     assert_eq!(j["triangle_count"], field.triangle_count());
@@ -400,7 +401,8 @@ fn dump_text_describes_the_field_and_names_every_section() {
     let r = vlf(&["dump", s(&field_path)]).ok();
     assert_eq!(r.stderr, "");
     let field = Field::open(&field_path).unwrap();
-    assert!(r.stdout.starts_with("VLF field, format 1.0"), "{}", r.stdout);
+    assert!(r.stdout.starts_with("VLF field, format 1.1"), "{}", r.stdout);
+    assert!(r.stdout.contains("0 materials, 0 cameras, 0 lights"), "{}", r.stdout);
     assert!(r.stdout.contains(&hex(&field.content_hash())), "{}", r.stdout);
     assert!(r.stdout.contains(&format!("{BUNNY_TRIANGLES}")), "{}", r.stdout);
     for name in SECTION_NAMES {
@@ -888,6 +890,7 @@ fn every_subcommand_has_help() {
         &["dump", "--help"],
         &["trace", "--help"],
         &["rays", "--help"],
+        &["render", "--help"],
         &["gen", "--help"],
         &["demo", "--help"],
         &["help", "bake"],
@@ -898,7 +901,7 @@ fn every_subcommand_has_help() {
         assert!(r.stdout.contains("--help"), "`{}`:\n{}", r.what, r.stdout);
     }
     let r = vlf(&["--help"]).ok();
-    for sub in ["bake", "dump", "trace", "rays", "gen", "demo"] {
+    for sub in ["bake", "dump", "trace", "rays", "render", "gen", "demo"] {
         assert!(r.stdout.contains(sub), "top-level help does not list `{sub}`:\n{}", r.stdout);
     }
     let v = vlf(&["--version"]).ok();
@@ -956,13 +959,121 @@ fn demo_bakes_verifies_and_traces() {
     let r = vlf(&["demo", "--input", s(&mesh("Box.gltf")), "--output-dir", s(&out)]).ok();
     assert!(r.stdout.contains("verify: OK"), "{}", r.stdout);
     assert_eq!(r.stdout.matches("traced").count(), 2, "{}", r.stdout);
-    assert_eq!(names_in(&out), ["demo.vlf", "inside.hits", "inside.rays", "outside.hits", "outside.rays"]);
+    assert!(r.stdout.contains("rendered"), "{}", r.stdout);
+    assert_eq!(names_in(&out), ["demo.png", "demo.vlf", "inside.hits", "inside.rays", "outside.hits", "outside.rays"]);
+    let (width, height, _) = vlf_render::decode_png(&std::fs::read(out.join("demo.png")).unwrap()).unwrap();
+    assert_eq!((width, height), (640, 480));
     assert_eq!(std::fs::metadata(out.join("outside.rays")).unwrap().len(), 512 * 512 * 32);
     assert_eq!(std::fs::metadata(out.join("inside.hits")).unwrap().len(), 512 * 512 * 16);
     assert_eq!(Field::open(out.join("demo.vlf")).unwrap().triangle_count() as u64, BOX_TRIANGLES);
 
     let r = vlf(&["demo", "--input", s(&dir.path().join("nothing.obj")), "--output-dir", s(&out)]);
     assert!(r.one_error_line().contains("nothing.obj"));
+}
+
+// ---------------------------------------------------------------------------------------------
+// 8b. render
+
+#[test]
+fn render_writes_the_picture_and_the_work_picture_and_counts_rays_by_kind() {
+    let dir = tempdir();
+    let field = dir.path().join("cornell.vlf");
+    bake(&[&mesh("cornell/cornell.obj")], &field, &["-q"]).ok();
+    let (png, work) = (dir.path().join("cornell.png"), dir.path().join("work.png"));
+    let r = vlf(&[
+        "render",
+        s(&field),
+        "-o",
+        s(&png),
+        "--width",
+        "40",
+        "--height",
+        "30",
+        "--samples",
+        "1",
+        "--eye",
+        "0,12,48",
+        "--target",
+        "0,12,0",
+        "--fov",
+        "38",
+        "--work-image",
+        s(&work),
+        "--work",
+        "tiles",
+        "--json",
+    ])
+    .ok();
+    assert_eq!(r.stderr, "");
+    let j = r.json();
+    for key in ["output", "width", "height", "seconds", "rays", "mrays_per_s", "work", "work_image", "camera", "lights"]
+    {
+        assert!(j.get(key).is_some(), "render --json lacks `{key}`: {j}");
+    }
+    let rays = &j["rays"];
+    assert_eq!(rays["primary"], 40 * 30);
+    let kinds = ["primary", "shadow", "reflection", "refraction"].map(|k| rays[k].as_u64().unwrap());
+    assert_eq!(kinds.iter().sum::<u64>(), rays["total"].as_u64().unwrap(), "{j}");
+    // The room has a mirror and a glass ball in view, and the default lights cast shadows.
+    assert!(kinds[1] > 0 && kinds[2] > 0 && kinds[3] > 0, "{j}");
+    assert_eq!(j["lights"], "default key and fill");
+    assert_eq!(j["work_image"]["metric"], "tiles visited");
+    for path in [&png, &work] {
+        let (w, h, _) = vlf_render::decode_png(&std::fs::read(path).unwrap()).unwrap();
+        assert_eq!((w, h), (40, 30), "{}", path.display());
+    }
+    assert_no_temp_files(dir.path());
+}
+
+#[test]
+fn render_uses_the_fields_gltf_camera_and_lights_and_not_the_thread_count() {
+    let dir = tempdir();
+    let field = dir.path().join("cornell.vlf");
+    bake(&[&mesh("cornell/cornell.gltf")], &field, &["-q"]).ok();
+    let r = vlf(&["dump", s(&field)]).ok();
+    assert!(r.stdout.contains("7 materials, 1 cameras, 2 lights"), "{}", r.stdout);
+
+    // The camera's aspect ratio (4:3) sets the height.
+    let one = dir.path().join("one.png");
+    let j = vlf(&["render", s(&field), "-o", s(&one), "--width", "48", "--samples", "1", "--threads", "1", "--json"])
+        .ok()
+        .json();
+    assert_eq!((&j["width"], &j["height"]), (&json!(48), &json!(36)), "{j}");
+    assert_eq!(j["camera"], "field camera 0 \"front\"");
+    assert_eq!((&j["lights"], &j["light_count"]), (&json!("the field's"), &json!(2)), "{j}");
+    let two = dir.path().join("two.png");
+    vlf(&["render", s(&field), "-o", s(&two), "--width", "48", "--samples", "1", "--threads", "2", "-q"]).ok();
+    assert_eq!(std::fs::read(&one).unwrap(), std::fs::read(&two).unwrap(), "the thread count changed the picture");
+
+    let j =
+        vlf(&["render", s(&field), "-o", s(&two), "--width", "32", "--view", "inside", "--default-lights", "--json"])
+            .ok()
+            .json();
+    assert_eq!((&j["camera"], &j["height"]), (&json!("inside (across the scene)"), &json!(480)), "{j}");
+    assert_eq!(j["lights"], "default key and fill");
+
+    let r = vlf(&["render", s(&field), "-o", s(&two), "--camera", "1"]).fails_with(1);
+    assert!(r.one_error_line().contains("has 1 camera(s)"), "{}", r.stderr);
+}
+
+#[test]
+fn render_refuses_bad_flags_with_a_clear_message() {
+    let dir = tempdir();
+    let field = bake_bunny(dir.path(), "bunny.vlf");
+    let out = dir.path().join("out.png");
+    for (flags, code, says) in [
+        (&["--eye", "1,2"][..], 2, "expected 3"),
+        (&["--light", "0,0,0,-1"][..], 2, "intensity"),
+        (&["--samples", "0"][..], 1, "--samples"),
+        (&["--max-depth", "65"][..], 1, "--max-depth"),
+        (&["--width", "0"][..], 1, "--width"),
+        (&["--fov", "200", "--eye", "0,0,30"][..], 1, "--fov"),
+        (&["--view", "inside", "--camera", "0"][..], 2, "cannot be used with"),
+    ] {
+        let r = vlf(&[&["render", s(&field), "-o", s(&out)][..], flags].concat()).fails_with(code);
+        assert!(r.stderr.contains(says), "{flags:?}: {}", r.stderr);
+    }
+    assert!(!out.exists());
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -708,3 +708,214 @@ fn mutated_fixtures_never_panic() {
         }
     }
 }
+
+// ---------------------------------------------------------------------------------------------
+// Materials, cameras and lights (formats/vlf.md §5.10–5.12)
+
+/// The material record of `scene` named `name`.
+fn material<'a>(scene: &'a Scene, name: &str) -> &'a vlf_format::MaterialRecord {
+    scene
+        .materials
+        .iter()
+        .find(|m| string(scene, m.name_offset, m.name_length) == name)
+        .unwrap_or_else(|| panic!("no material {name:?}"))
+}
+
+fn assert_rgb(actual: [f32; 3], expected: [f32; 3]) {
+    for k in 0..3 {
+        assert!((actual[k] - expected[k]).abs() < 1e-6, "{actual:?} != {expected:?}");
+    }
+}
+
+#[test]
+fn obj_materials_map_mtl_statements_to_the_whitted_model() {
+    let scene = import("cornell/cornell.obj");
+    assert!(scene.report.warnings.is_empty(), "{:?}", scene.report.warnings);
+    let names: Vec<&str> = scene.materials.iter().map(|m| string(&scene, m.name_offset, m.name_length)).collect();
+    assert_eq!(names, ["white", "red", "green", "yellow", "lamp", "mirror", "glass"]);
+    assert!(scene.materials.iter().enumerate().all(|(i, m)| m.input == 0 && m.index == i as u32));
+    // Every source's material index names the record of the material its `usemtl` gave.
+    for (s, source) in scene.sources.iter().enumerate() {
+        let m = &scene.materials[source.material as usize];
+        let expected = match source_name(&scene, s) {
+            "floor" | "ceiling" | "back" => "white",
+            "left" => "red",
+            "right" => "green",
+            "lamp" => "lamp",
+            "mirror_block" => "mirror",
+            "yellow_block" => "yellow",
+            "glass_sphere" => "glass",
+            other => panic!("unexpected source {other}"),
+        };
+        assert_eq!(string(&scene, m.name_offset, m.name_length), expected);
+    }
+    // Only Kd: the defaults (no highlight, mirror, transmission or emission; ior 1).
+    let white = material(&scene, "white");
+    assert_rgb(white.diffuse, [0.75, 0.75, 0.72]);
+    assert_eq!(
+        (white.specular, white.reflection, white.transmission, white.emission),
+        ([0.0; 3], [0.0; 3], [0.0; 3], [0.0; 3])
+    );
+    assert_eq!((white.shininess, white.ior), (1.0, 1.0));
+    // illum 3: Ks is both the highlight and the mirror.
+    let mirror = material(&scene, "mirror");
+    assert_rgb(mirror.reflection, [0.85; 3]);
+    assert_rgb(mirror.specular, [0.85; 3]);
+    assert_eq!(mirror.shininess, 800.0);
+    // d 0.05: 5% of Kd stays diffuse, 95% of Tf is transmitted, Ni is the index of refraction.
+    let glass = material(&scene, "glass");
+    assert_rgb(glass.diffuse, [0.05; 3]);
+    assert_rgb(glass.transmission, [0.95; 3]);
+    assert_rgb(glass.reflection, [0.1; 3]);
+    assert_eq!(glass.ior, 1.5);
+    // illum 1: no highlights; Ke is emission.
+    let lamp = material(&scene, "lamp");
+    assert_rgb(lamp.emission, [1.0, 1.0, 0.95]);
+    assert_eq!(lamp.specular, [0.0; 3]);
+    // OBJ has no cameras or lights.
+    assert!(scene.cameras.is_empty() && scene.lights.is_empty());
+}
+
+#[test]
+fn gltf_materials_cameras_and_lights_are_imported_in_world_space() {
+    use vlf_format::{camera_kind, light_kind};
+    let scene = import("cornell/cornell.gltf");
+    assert!(scene.report.warnings.is_empty(), "{:?}", scene.report.warnings);
+    assert_eq!(scene.materials.len(), 7);
+    // metallic 1, roughness 0: a mirror of the base colour, nothing diffuse.
+    let mirror = material(&scene, "mirror");
+    assert_rgb(mirror.reflection, [0.85; 3]);
+    assert_rgb(mirror.diffuse, [0.0; 3]);
+    assert_eq!(mirror.shininess, 4096.0);
+    // KHR_materials_transmission and KHR_materials_ior.
+    let glass = material(&scene, "glass");
+    assert_rgb(glass.transmission, [1.0; 3]);
+    assert_rgb(glass.diffuse, [0.0; 3]);
+    assert_rgb(glass.reflection, [0.04; 3]);
+    assert_eq!(glass.ior, 1.5);
+    // A rough dielectric: all diffuse, a dim broad highlight, no mirror.
+    let red = material(&scene, "red");
+    assert_rgb(red.diffuse, [0.7, 0.12, 0.1]);
+    assert_rgb(red.specular, [0.04; 3]);
+    assert_eq!((red.reflection, red.shininess), ([0.0; 3], 1.0));
+    assert_rgb(material(&scene, "lamp").emission, [1.0, 1.0, 0.95]);
+
+    assert_eq!(scene.cameras.len(), 1);
+    let c = &scene.cameras[0];
+    assert_eq!((c.kind, c.camera, c.input), (camera_kind::PERSPECTIVE, 0, 0));
+    assert_eq!(string(&scene, c.name_offset, c.name_length), "front");
+    assert_eq!((c.position, c.forward, c.up), ([0.0, 12.0, 48.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]));
+    assert_eq!((c.yfov, c.znear, c.zfar), (0.66, 0.1, 0.0));
+    assert!((c.aspect_ratio - 4.0 / 3.0).abs() < 1e-6);
+
+    assert_eq!(scene.lights.len(), 2);
+    let (lamp, fill) = (&scene.lights[0], &scene.lights[1]);
+    assert_eq!(string(&scene, lamp.name_offset, lamp.name_length), "lamp");
+    assert_eq!((lamp.kind, lamp.light, lamp.intensity), (light_kind::SPOT, 0, 400.0));
+    assert_eq!((lamp.inner_cone, lamp.outer_cone, lamp.position), (0.8, 1.4, [0.0, 23.0, -2.0]));
+    // The node's rotation turns its -z axis straight down.
+    assert_close(lamp.direction, [0.0, -1.0, 0.0], 1e-6);
+    assert_eq!((fill.kind, fill.position, fill.color), (light_kind::POINT, [-10.0, 16.0, 40.0], [0.85, 0.9, 1.0]));
+}
+
+#[test]
+fn a_camera_and_a_light_follow_their_nodes_transforms() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut doc = tiny_gltf();
+    let half = std::f64::consts::FRAC_1_SQRT_2;
+    // A parent translated by (1, 2, 3) and turned 90° about y (-z becomes -x) holds the camera;
+    // its child, translated by 5 along the parent's z, holds a directional light.
+    doc["nodes"] = json!([
+        {"mesh": 0},
+        {"translation": [1, 2, 3], "rotation": [0, half, 0, half], "camera": 0, "children": [2]},
+        {"translation": [0, 0, 5], "extensions": {"KHR_lights_punctual": {"light": 0}}}
+    ]);
+    doc["scenes"] = json!([{"nodes": [0, 1]}]);
+    doc["cameras"] =
+        json!([{"type": "orthographic", "orthographic": {"xmag": 2, "ymag": 1.5, "znear": 0, "zfar": 100}}]);
+    doc["extensions"] =
+        json!({"KHR_lights_punctual": {"lights": [{"type": "directional", "intensity": 3, "name": "sun"}]}});
+    let scene = import_json(dir.path(), "placed.gltf", &doc).unwrap();
+    assert!(scene.report.warnings.is_empty(), "{:?}", scene.report.warnings);
+    let c = &scene.cameras[0];
+    assert_eq!((c.kind, c.node, c.xmag, c.ymag, c.yfov), (vlf_format::camera_kind::ORTHOGRAPHIC, 1, 2.0, 1.5, 0.0));
+    assert_close(c.position, [1.0, 2.0, 3.0], 1e-6);
+    assert_close(c.forward, [-1.0, 0.0, 0.0], 1e-6);
+    assert_close(c.up, [0.0, 1.0, 0.0], 1e-6);
+    let l = &scene.lights[0];
+    assert_eq!((l.kind, l.node, l.intensity, l.color), (vlf_format::light_kind::DIRECTIONAL, 2, 3.0, [1.0; 3]));
+    assert_eq!(string(&scene, l.name_offset, l.name_length), "sun");
+    // The child's +z is the parent's +x.
+    assert_close(l.position, [6.0, 2.0, 3.0], 1e-6);
+    assert_close(l.direction, [-1.0, 0.0, 0.0], 1e-6);
+}
+
+#[test]
+fn unusable_cameras_and_lights_are_skipped_with_a_warning_and_bad_indices_are_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut doc = tiny_gltf();
+    doc["nodes"] = json!([
+        {"mesh": 0},
+        {"camera": 0},
+        {"camera": 1, "scale": [0, 0, 0]},
+        {"extensions": {"KHR_lights_punctual": {"light": 0}}}
+    ]);
+    doc["scenes"] = json!([{"nodes": [0, 1, 2, 3]}]);
+    doc["cameras"] = json!([
+        // Declares a perspective camera but gives orthographic parameters (the gltf crate would panic).
+        {"type": "perspective", "orthographic": {"xmag": 1, "ymag": 1, "znear": 0, "zfar": 10}},
+        {"type": "perspective", "perspective": {"yfov": 0.8, "znear": 0.1}}
+    ]);
+    doc["extensions"] = json!({"KHR_lights_punctual": {"lights": [
+        {"type": "spot", "spot": {"innerConeAngle": 1.0, "outerConeAngle": 0.5}}
+    ]}});
+    let scene = import_json(dir.path(), "bad.gltf", &doc).unwrap();
+    assert!(scene.cameras.is_empty() && scene.lights.is_empty());
+    let w = &scene.report.warnings;
+    assert_eq!(w.len(), 3, "{w:?}");
+    assert!(w[0].contains("node 1: camera 0 skipped"), "{w:?}");
+    assert!(w[1].contains("node 2: camera 1 skipped"), "{w:?}");
+    assert!(w[2].contains("node 3: light 0 skipped"), "{w:?}");
+
+    doc["nodes"][3] = json!({"extensions": {"KHR_lights_punctual": {"light": 4}}});
+    let e = import_json(dir.path(), "bad.gltf", &doc).unwrap_err().to_string();
+    assert!(e.contains("bad.gltf") && e.contains("nodes[3]") && e.contains("light"), "{e}");
+}
+
+#[test]
+fn a_malformed_mtl_statement_is_ignored_with_a_warning_naming_its_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let obj = "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\n";
+    std::fs::write(dir.path().join("t.obj"), obj).unwrap();
+    for (mtl, says) in [
+        ("newmtl a\nKd 1 nan 0\n", "line 2"),
+        ("newmtl a\nKd 1 1\n", "line 2"),
+        ("newmtl a\nKd spectral file.rfl\n", "spectral"),
+        ("newmtl a\n\nd 1.5\n", "line 3"),
+        ("newmtl a\nNi 0\n", "Ni"),
+        ("newmtl a\nillum 2.5\n", "illum"),
+        ("newmtl a\nKs -1 0 0\n", "non-negative"),
+    ] {
+        std::fs::write(dir.path().join("m.mtl"), mtl).unwrap();
+        let scene = import_paths(&[dir.path().join("t.obj")]).unwrap();
+        // The material is kept, with its defaults where the statement was.
+        assert_eq!(scene.sources[0].material, 0, "{mtl:?}");
+        let m = &scene.materials[0];
+        assert_eq!((m.diffuse, m.specular, m.ior, m.transmission), ([0.8; 3], [0.0; 3], 1.0, [0.0; 3]), "{mtl:?}");
+        let w = scene.report.warnings.join("\n");
+        assert!(w.contains("m.mtl") && w.contains(says) && w.contains("ignored"), "{mtl:?}: {w}");
+    }
+    // A newmtl without a name would renumber the materials: the library is not used.
+    std::fs::write(dir.path().join("m.mtl"), "newmtl\nnewmtl a\n").unwrap();
+    let scene = import_paths(&[dir.path().join("t.obj")]).unwrap();
+    assert!(scene.materials.is_empty());
+    assert_eq!(scene.sources[0].material, NO_INDEX);
+    // Tr is 1 - d; the later of d and Tr wins; a single number is a grey; textures are noted.
+    std::fs::write(dir.path().join("m.mtl"), "Kd 9 9 9\nnewmtl a\nd 0.2\nTr 0.25\nKd 0.5\nTf 0.5 1 1\nmap_Kd x.png\n")
+        .unwrap();
+    let scene = import_paths(&[dir.path().join("t.obj")]).unwrap();
+    let m = &scene.materials[0];
+    assert_rgb(m.diffuse, [0.375; 3]);
+    assert_rgb(m.transmission, [0.125, 0.25, 0.25]);
+    assert!(scene.report.warnings.iter().any(|w| w.contains("texture")), "{:?}", scene.report.warnings);
+}

@@ -8,8 +8,9 @@ use bytemuck::{Pod, Zeroable};
 pub const MAGIC: [u8; 8] = [0x89, b'V', b'L', b'F', b'\r', b'\n', 0x1a, b'\n'];
 /// The major version this crate reads and writes. A reader refuses any other major.
 pub const VERSION_MAJOR: u16 = 1;
-/// The minor version this crate writes. Readers of the same major accept any minor.
-pub const VERSION_MINOR: u16 = 0;
+/// The minor version this crate writes. Readers of the same major accept any minor. Minor 1 added
+/// the optional MATERIALS, CAMERAS and LIGHTS sections.
+pub const VERSION_MINOR: u16 = 1;
 /// Size of the header in bytes.
 pub const HEADER_SIZE: usize = 128;
 /// Size of one section-table entry in bytes.
@@ -202,6 +203,82 @@ pub struct InputRecord {
     pub file_hash: [u8; 32],
 }
 
+/// MATERIALS (§5.10): one surface of the Whitted model, keyed by (input, index in that input).
+/// Colours are linear RGB.
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+#[repr(C)]
+pub struct MaterialRecord {
+    pub input: u32,
+    pub index: u32,
+    pub name_offset: u32,
+    pub name_length: u32,
+    pub diffuse: [f32; 3],
+    pub shininess: f32,
+    pub specular: [f32; 3],
+    pub ior: f32,
+    pub reflection: [f32; 3],
+    pub reserved0: u32,
+    pub transmission: [f32; 3],
+    pub reserved1: u32,
+    pub emission: [f32; 3],
+    pub reserved2: u32,
+}
+
+/// CAMERAS (§5.11): a camera placed by a node, in world space.
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+#[repr(C)]
+pub struct CameraRecord {
+    pub kind: u32,
+    pub input: u32,
+    pub camera: u32,
+    pub node: u32,
+    pub name_offset: u32,
+    pub name_length: u32,
+    pub position: [f32; 3],
+    pub forward: [f32; 3],
+    pub up: [f32; 3],
+    pub yfov: f32,
+    pub aspect_ratio: f32,
+    pub znear: f32,
+    pub zfar: f32,
+    pub xmag: f32,
+    pub ymag: f32,
+    pub reserved: u32,
+}
+
+/// CAMERAS `kind` values.
+pub mod camera_kind {
+    pub const PERSPECTIVE: u32 = 1;
+    pub const ORTHOGRAPHIC: u32 = 2;
+}
+
+/// LIGHTS (§5.12): a punctual light placed by a node, in world space.
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+#[repr(C)]
+pub struct LightRecord {
+    pub kind: u32,
+    pub input: u32,
+    pub light: u32,
+    pub node: u32,
+    pub name_offset: u32,
+    pub name_length: u32,
+    pub position: [f32; 3],
+    pub direction: [f32; 3],
+    pub color: [f32; 3],
+    pub intensity: f32,
+    pub range: f32,
+    pub inner_cone: f32,
+    pub outer_cone: f32,
+    pub reserved: u32,
+}
+
+/// LIGHTS `kind` values.
+pub mod light_kind {
+    pub const POINT: u32 = 1;
+    pub const SPOT: u32 = 2;
+    pub const DIRECTIONAL: u32 = 3;
+}
+
 /// STATISTICS (§5.9).
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq, Eq)]
 #[repr(C)]
@@ -236,11 +313,36 @@ pub enum SectionKind {
     Inputs = 13,
     Strings = 14,
     Statistics = 15,
+    Materials = 16,
+    Cameras = 17,
+    Lights = 18,
 }
 
 impl SectionKind {
-    /// Every kind of version 1.0, in the order the writer lays them out.
-    pub const ALL: [SectionKind; 15] = [
+    /// Every kind this crate knows, in the order the writer lays out the small ones.
+    pub const ALL: [SectionKind; 18] = [
+        SectionKind::Scene,
+        SectionKind::Params,
+        SectionKind::Directions,
+        SectionKind::Rotations,
+        SectionKind::Lookup,
+        SectionKind::Beams,
+        SectionKind::Tiles,
+        SectionKind::LeafBounds,
+        SectionKind::TriangleIds,
+        SectionKind::Triangles,
+        SectionKind::Provenance,
+        SectionKind::Sources,
+        SectionKind::Inputs,
+        SectionKind::Strings,
+        SectionKind::Statistics,
+        SectionKind::Materials,
+        SectionKind::Cameras,
+        SectionKind::Lights,
+    ];
+
+    /// The kinds every version 1 file holds (the kinds of version 1.0).
+    pub const REQUIRED: [SectionKind; 15] = [
         SectionKind::Scene,
         SectionKind::Params,
         SectionKind::Directions,
@@ -257,6 +359,15 @@ impl SectionKind {
         SectionKind::Strings,
         SectionKind::Statistics,
     ];
+
+    /// The kinds added in version 1.1: a file may omit them, which means the same as an empty
+    /// section (a 1.0 file has none).
+    pub const OPTIONAL: [SectionKind; 3] = [SectionKind::Materials, SectionKind::Cameras, SectionKind::Lights];
+
+    /// Whether a version 1 file must hold this kind.
+    pub const fn is_required(self) -> bool {
+        (self as u32) <= SectionKind::Statistics as u32
+    }
 
     pub fn from_u32(kind: u32) -> Option<SectionKind> {
         SectionKind::ALL.iter().copied().find(|k| *k as u32 == kind)
@@ -280,6 +391,9 @@ impl SectionKind {
             SectionKind::Inputs => size_of::<InputRecord>() as u32,
             SectionKind::Strings => 1,
             SectionKind::Statistics => size_of::<StatisticsRecord>() as u32,
+            SectionKind::Materials => size_of::<MaterialRecord>() as u32,
+            SectionKind::Cameras => size_of::<CameraRecord>() as u32,
+            SectionKind::Lights => size_of::<LightRecord>() as u32,
         }
     }
 
@@ -301,6 +415,9 @@ impl SectionKind {
             SectionKind::Inputs => "INPUTS",
             SectionKind::Strings => "STRINGS",
             SectionKind::Statistics => "STATISTICS",
+            SectionKind::Materials => "MATERIALS",
+            SectionKind::Cameras => "CAMERAS",
+            SectionKind::Lights => "LIGHTS",
         }
     }
 }
@@ -333,6 +450,13 @@ const _: () = {
     assert!(size_of::<SourceRecord>() == 32);
     assert!(size_of::<InputRecord>() == 48);
     assert!(size_of::<StatisticsRecord>() == 384);
+    assert!(size_of::<MaterialRecord>() == 96);
+    assert!(size_of::<CameraRecord>() == 88);
+    assert!(size_of::<LightRecord>() == 80);
+    assert!(std::mem::offset_of!(MaterialRecord, specular) == 32);
+    assert!(std::mem::offset_of!(MaterialRecord, emission) == 80);
+    assert!(std::mem::offset_of!(CameraRecord, yfov) == 60);
+    assert!(std::mem::offset_of!(LightRecord, intensity) == 60);
     // Field offsets the spec names explicitly.
     assert!(std::mem::offset_of!(Header, content_hash) == 48);
     assert!(std::mem::offset_of!(Header, input_hash) == 80);

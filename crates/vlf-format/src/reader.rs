@@ -30,6 +30,12 @@ pub struct FieldReader<'a> {
     pub sources: &'a [SourceRecord],
     pub inputs: &'a [InputRecord],
     pub strings: &'a [u8],
+    /// MATERIALS (§5.10); empty if the file has none (every 1.0 file).
+    pub materials: &'a [MaterialRecord],
+    /// CAMERAS (§5.11); empty if the file has none.
+    pub cameras: &'a [CameraRecord],
+    /// LIGHTS (§5.12); empty if the file has none.
+    pub lights: &'a [LightRecord],
 }
 
 /// The header and table checks of §7, without casting any section. Used by [`FieldReader::new`]
@@ -169,11 +175,15 @@ impl<'a> FieldReader<'a> {
     /// [`FormatError::Misaligned`] names the section that could not be cast.
     pub fn new(bytes: &'a [u8]) -> Result<Self, FormatError> {
         let (header, table) = read_header_and_table(bytes)?;
+        // An optional kind (§4) that is absent reads as an empty section.
         let raw = |kind: SectionKind| -> Result<&'a [u8], FormatError> {
-            let e = table
-                .iter()
-                .find(|e| e.kind == kind as u32)
-                .ok_or(FormatError::MissingSection { kind: kind.name() })?;
+            let Some(e) = table.iter().find(|e| e.kind == kind as u32) else {
+                return if kind.is_required() {
+                    Err(FormatError::MissingSection { kind: kind.name() })
+                } else {
+                    Ok(&[])
+                };
+            };
             if e.codec != codec::RAW {
                 return Err(FormatError::CompressedSection { kind: kind.name(), codec: e.codec });
             }
@@ -215,6 +225,9 @@ impl<'a> FieldReader<'a> {
             sources: typed(raw(SectionKind::Sources)?, SectionKind::Sources)?,
             inputs: typed(raw(SectionKind::Inputs)?, SectionKind::Inputs)?,
             strings: raw(SectionKind::Strings)?,
+            materials: typed(raw(SectionKind::Materials)?, SectionKind::Materials)?,
+            cameras: typed(raw(SectionKind::Cameras)?, SectionKind::Cameras)?,
+            lights: typed(raw(SectionKind::Lights)?, SectionKind::Lights)?,
         };
         expect_count(SectionKind::Directions, reader.directions.len() as u64, l)?;
         expect_count(SectionKind::Rotations, reader.rotations.len() as u64, l)?;
@@ -286,6 +299,10 @@ fn check_field(field: &'static str, found: u64, expected: u64) -> Result<(), For
 
 /// Casts bytes to a slice of `T`, or says which section could not be cast.
 pub(crate) fn cast_slice<'b, T: Pod>(bytes: &'b [u8], kind: &'static str) -> Result<&'b [T], FormatError> {
+    // An empty section (or an absent optional one) casts whatever its address.
+    if bytes.is_empty() {
+        return Ok(&[]);
+    }
     bytemuck::try_cast_slice(bytes).map_err(|e| match e {
         bytemuck::PodCastError::TargetAlignmentGreaterAndInputNotAligned => {
             FormatError::Misaligned { kind, address: bytes.as_ptr() as usize }

@@ -57,6 +57,9 @@ pub fn verify(field: &FieldReader<'_>, progress: &mut dyn FnMut(u64, u64)) -> Re
     check_reserved(field)?;
     check_beams_tiles_leaves(field, &mut report)?;
     check_triangles_and_provenance(field)?;
+    check_materials(field)?;
+    check_cameras(field)?;
+    check_lights(field)?;
     check_statistics(field)?;
     progress(total, total);
     Ok(report)
@@ -197,6 +200,120 @@ fn check_triangles_and_provenance(f: &FieldReader<'_>) -> Result<(), FormatError
     for (i, p) in f.provenance.iter().enumerate() {
         if p.source >= f.sources.len() as u32 {
             return Err(invalid("PROVENANCE", format!("triangle {i}: source {} out of range", p.source)));
+        }
+    }
+    Ok(())
+}
+
+fn finite(values: &[f32]) -> bool {
+    values.iter().all(|v| v.is_finite())
+}
+
+fn non_negative(values: &[f32]) -> bool {
+    values.iter().all(|&v| v >= 0.0)
+}
+
+/// Whether `v` has unit length to within the rounding of a normalised f32 vector.
+fn unit(v: [f32; 3]) -> bool {
+    let len = (v.iter().map(|&c| c as f64 * c as f64).sum::<f64>()).sqrt();
+    (len - 1.0).abs() <= 1e-4
+}
+
+/// MATERIALS (§5.10): inputs and names in range, keys strictly increasing, values finite and in
+/// their domains, reserved fields zero.
+fn check_materials(f: &FieldReader<'_>) -> Result<(), FormatError> {
+    let mut previous: Option<(u32, u32)> = None;
+    for (i, m) in f.materials.iter().enumerate() {
+        let bad = |problem: &str| invalid("MATERIALS", format!("material {i}: {problem}"));
+        if m.input >= f.inputs.len() as u32 {
+            return Err(bad(&format!("input {} out of range", m.input)));
+        }
+        if previous.is_some_and(|p| p >= (m.input, m.index)) {
+            return Err(bad("(input, index) is not greater than the previous material's"));
+        }
+        previous = Some((m.input, m.index));
+        if f.string(m.name_offset, m.name_length).is_none() {
+            return Err(bad("name is out of bounds or not UTF-8"));
+        }
+        let colours = [m.diffuse, m.specular, m.reflection, m.transmission, m.emission];
+        if !colours.iter().all(|c| finite(c)) || !finite(&[m.shininess, m.ior]) {
+            return Err(bad("a value is not finite"));
+        }
+        if !colours.iter().all(|c| non_negative(c)) || m.shininess < 0.0 || m.ior <= 0.0 {
+            return Err(bad("a colour or the shininess is negative, or the index of refraction is not positive"));
+        }
+        if (m.reserved0, m.reserved1, m.reserved2) != (0, 0, 0) {
+            return Err(bad("reserved fields are not zero"));
+        }
+    }
+    Ok(())
+}
+
+/// CAMERAS (§5.11).
+fn check_cameras(f: &FieldReader<'_>) -> Result<(), FormatError> {
+    for (i, c) in f.cameras.iter().enumerate() {
+        let bad = |problem: &str| invalid("CAMERAS", format!("camera {i}: {problem}"));
+        if c.input >= f.inputs.len() as u32 {
+            return Err(bad(&format!("input {} out of range", c.input)));
+        }
+        if f.string(c.name_offset, c.name_length).is_none() {
+            return Err(bad("name is out of bounds or not UTF-8"));
+        }
+        let scalars = [c.yfov, c.aspect_ratio, c.znear, c.zfar, c.xmag, c.ymag];
+        if !finite(&c.position) || !finite(&c.forward) || !finite(&c.up) || !finite(&scalars) {
+            return Err(bad("a value is not finite"));
+        }
+        if !unit(c.forward) || !unit(c.up) {
+            return Err(bad("forward or up is not a unit vector"));
+        }
+        if !non_negative(&scalars) {
+            return Err(bad("a projection parameter is negative"));
+        }
+        let projection_ok = match c.kind {
+            camera_kind::PERSPECTIVE => c.yfov > 0.0 && c.yfov < std::f32::consts::PI && c.xmag == 0.0 && c.ymag == 0.0,
+            camera_kind::ORTHOGRAPHIC => c.xmag > 0.0 && c.ymag > 0.0 && c.yfov == 0.0 && c.aspect_ratio == 0.0,
+            other => return Err(bad(&format!("unknown kind {other}"))),
+        };
+        if !projection_ok {
+            return Err(bad("projection parameters do not fit its kind"));
+        }
+        if c.reserved != 0 {
+            return Err(bad("reserved field is not zero"));
+        }
+    }
+    Ok(())
+}
+
+/// LIGHTS (§5.12).
+fn check_lights(f: &FieldReader<'_>) -> Result<(), FormatError> {
+    for (i, l) in f.lights.iter().enumerate() {
+        let bad = |problem: &str| invalid("LIGHTS", format!("light {i}: {problem}"));
+        if l.input >= f.inputs.len() as u32 {
+            return Err(bad(&format!("input {} out of range", l.input)));
+        }
+        if f.string(l.name_offset, l.name_length).is_none() {
+            return Err(bad("name is out of bounds or not UTF-8"));
+        }
+        let scalars = [l.intensity, l.range, l.inner_cone, l.outer_cone];
+        if !finite(&l.position) || !finite(&l.direction) || !finite(&l.color) || !finite(&scalars) {
+            return Err(bad("a value is not finite"));
+        }
+        if !unit(l.direction) {
+            return Err(bad("direction is not a unit vector"));
+        }
+        if !non_negative(&l.color) || !non_negative(&scalars) {
+            return Err(bad("colour, intensity, range or a cone angle is negative"));
+        }
+        let cones_ok = match l.kind {
+            light_kind::SPOT => l.inner_cone < l.outer_cone && l.outer_cone <= std::f32::consts::FRAC_PI_2,
+            light_kind::POINT | light_kind::DIRECTIONAL => l.inner_cone == 0.0 && l.outer_cone == 0.0,
+            other => return Err(bad(&format!("unknown kind {other}"))),
+        };
+        if !cones_ok {
+            return Err(bad("cone angles do not fit its kind (spot: 0 <= inner < outer <= pi/2; others: 0)"));
+        }
+        if l.reserved != 0 {
+            return Err(bad("reserved field is not zero"));
         }
     }
     Ok(())

@@ -58,6 +58,21 @@ impl Camera {
         Camera::look_at(eye, target, [0.0, 1.0, 0.0], 70.0, aspect)
     }
 
+    /// The unit view direction (towards the image centre).
+    pub fn forward(&self) -> [f64; 3] {
+        self.forward
+    }
+
+    /// The unit direction of the image's x axis (right).
+    pub fn right(&self) -> [f64; 3] {
+        normalize(self.right)
+    }
+
+    /// The unit direction of the image's upward axis.
+    pub fn up(&self) -> [f64; 3] {
+        normalize(self.up)
+    }
+
     /// The ray through image point `(x, y)`, both in `[0, 1]`.
     pub fn ray(&self, x: f64, y: f64) -> Ray {
         let sx = 2.0 * x - 1.0;

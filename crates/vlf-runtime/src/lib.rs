@@ -18,14 +18,21 @@
 //! ```
 //!
 //! `Field` is `Send + Sync`: share one across threads. Queries allocate nothing.
+//!
+//! A field of format 1.1 may also carry what a renderer needs besides geometry: each triangle's
+//! [`Material`] (through its provenance), and the [`SceneCamera`]s and [`SceneLight`]s of a glTF
+//! input. A field without them (every 1.0 field) returns `None` and empty iterators, and the
+//! renderer supplies its own defaults.
 
 mod query;
+mod scene;
 
 use std::fs::File;
 use std::io::Read;
 use std::path::{Path, PathBuf};
 
 pub use query::FieldView;
+pub use scene::{CameraProjection, LightKind, Material, SceneCamera, SceneLight};
 pub use vlf_format::{FieldReader, FormatError, hex};
 pub use vlf_geom::{Counter, Hit, Intersector, Ray, TraceStats};
 

@@ -6,6 +6,12 @@
 //! f64 and rounded to f32. Triangle lists, strips and fans are imported; point and line primitives
 //! are skipped and counted. Images are never loaded.
 //!
+//! Every material of the document becomes a MATERIALS record (mapped to the Whitted model of
+//! `formats/vlf.md` §5.10), and every camera and `KHR_lights_punctual` light that a visited node
+//! carries becomes a CAMERAS or LIGHTS record in world space (§5.11, §5.12). Cameras and lights
+//! are read from the JSON structs, not the crate's wrappers, which unwrap what validation does not
+//! guarantee (a perspective camera with only orthographic parameters, say).
+//!
 //! The crate is used defensively, because its happy path trusts the file: its validation indexes
 //! the POSITION accessor without a bounds check, its accessor reader computes byte ranges with
 //! unchecked arithmetic and asserts element sizes, and it refuses any `extensionsRequired` entry
@@ -14,7 +20,7 @@
 //! itself (naming a missing file), and checks every accessor it reads against its buffer view and
 //! buffer before handing it to the reader.
 
-use crate::scene::{ImportError, SceneBuilder, SourceDesc};
+use crate::scene::{ImportError, MaterialDesc, SceneBuilder, SourceDesc};
 use ::gltf as gl;
 use gl::accessor::{DataType, Dimensions};
 use gl::json::validation::Validate;
@@ -22,7 +28,7 @@ use gl::mesh::Mode;
 use serde_json::Value;
 use std::borrow::Cow;
 use std::path::{Path, PathBuf};
-use vlf_format::{NO_INDEX, source_kind};
+use vlf_format::{CameraRecord, LightRecord, NO_INDEX, camera_kind, light_kind, source_kind};
 
 /// Column-major 4×4 matrix, `m[column][row]`, like glTF.
 type Mat4 = [[f64; 4]; 4];
@@ -113,6 +119,8 @@ pub(super) fn import(builder: &mut SceneBuilder, input: u32, path: &Path, bytes:
         }
     };
 
+    import_materials(builder, &ctx, &document);
+
     let nodes: Vec<gl::Node> = document.nodes().collect();
     let mut visited = vec![false; nodes.len()];
     let mut mesh_used = vec![false; document.meshes().len()];
@@ -126,6 +134,7 @@ pub(super) fn import(builder: &mut SceneBuilder, input: u32, path: &Path, bytes:
             )));
         }
         let world = mul(&parent, &local_matrix(node.transform()));
+        import_camera_and_light(builder, &ctx, document.as_json(), index, &world);
         if let Some(mesh) = node.mesh() {
             mesh_used[mesh.index()] = true;
             if node.skin().is_some() {
@@ -351,6 +360,210 @@ fn resolve_uri(base: &Path, uri: &str) -> Result<PathBuf, String> {
     }
     let decoded = String::from_utf8(bytes).map_err(|_| "percent-decodes to invalid UTF-8".to_string())?;
     Ok(base.join(decoded))
+}
+
+/// Adds every material of the document, mapped as `formats/vlf.md` §5.10 says. Factors outside
+/// the ranges glTF allows are clamped into them, with a warning.
+fn import_materials(builder: &mut SceneBuilder, ctx: &Ctx, document: &gl::Document) {
+    for material in document.materials() {
+        let Some(index) = material.index() else { continue };
+        let pbr = material.pbr_metallic_roughness();
+        let mut clamped = false;
+        let mut unit = |v: f32| {
+            let c = if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
+            clamped |= c != v;
+            c
+        };
+        let [r, g, b, _] = pbr.base_color_factor();
+        let base = [unit(r), unit(g), unit(b)];
+        let metallic = unit(pbr.metallic_factor());
+        let roughness = unit(pbr.roughness_factor());
+        let transmission = unit(material.transmission().map_or(0.0, |t| t.transmission_factor()));
+        let emission = material.emissive_factor().map(&mut unit);
+        let ior = material.ior().unwrap_or(1.5);
+        let ior = if ior.is_finite() && ior >= 1.0 {
+            ior.min(10.0)
+        } else {
+            clamped = true;
+            1.0
+        };
+        if clamped {
+            ctx.warn(builder, format!("material {index}: a factor outside its glTF range was clamped into it"));
+        }
+        let f0 = base.map(|c| 0.04 * (1.0 - metallic) + c * metallic);
+        let gloss = (1.0 - roughness) * (1.0 - roughness);
+        let r4 = roughness.powi(4);
+        let shininess = if r4 > 0.0 { (2.0 / r4 - 2.0).clamp(1.0, 4096.0) } else { 4096.0 };
+        let desc = MaterialDesc {
+            name: material.name().unwrap_or("").to_string(),
+            diffuse: base.map(|c| c * (1.0 - metallic) * (1.0 - transmission) + c * metallic * (1.0 - gloss)),
+            shininess,
+            specular: f0,
+            ior,
+            reflection: f0.map(|c| c * gloss),
+            transmission: base.map(|c| c * transmission * (1.0 - metallic)),
+            emission,
+        };
+        builder.add_material(ctx.input, index as u32, &desc);
+    }
+}
+
+/// Adds the camera and the light node `index` carries, if any, placed by its world transform
+/// (`formats/vlf.md` §5.11, §5.12). One that cannot be placed or described (a singular
+/// transform, parameters outside glTF's ranges) is skipped with a warning.
+fn import_camera_and_light(builder: &mut SceneBuilder, ctx: &Ctx, root: &gl::json::Root, index: usize, world: &Mat4) {
+    let Some(node) = root.nodes.get(index) else { return };
+    let node_name = node.name.as_deref().unwrap_or("");
+    let position = [world[3][0], world[3][1], world[3][2]];
+    let forward = normalized([-world[2][0], -world[2][1], -world[2][2]]);
+    let up = normalized([world[1][0], world[1][1], world[1][2]]).and_then(|up| {
+        let f = forward?;
+        let along = up[0] * f[0] + up[1] * f[1] + up[2] * f[2];
+        normalized([up[0] - along * f[0], up[1] - along * f[1], up[2] - along * f[2]])
+    });
+    let finite = |v: [f64; 3]| v.iter().all(|c| c.is_finite() && c.abs() < 1e30);
+    let place = (finite(position)).then_some(()).and(forward.zip(up));
+
+    if let Some(camera_index) = node.camera.map(|c| c.value()) {
+        let camera = root.cameras.get(camera_index);
+        let record = camera.and_then(|c| {
+            let (forward, up) = place?;
+            camera_record(c, camera_index as u32, index as u32, position, forward, up, ctx.input)
+        });
+        match (camera, record) {
+            (Some(c), Some(record)) => builder.add_camera(c.name.as_deref().unwrap_or(node_name), record),
+            _ => ctx.warn(
+                builder,
+                format!("node {index}: camera {camera_index} skipped (its node transform is singular, or its parameters are invalid)"),
+            ),
+        }
+    }
+
+    let light_index = node.extensions.as_ref().and_then(|e| e.khr_lights_punctual.as_ref()).map(|l| l.light.value());
+    if let Some(light_index) = light_index {
+        let lights = root.extensions.as_ref().and_then(|e| e.khr_lights_punctual.as_ref()).map(|l| &l.lights);
+        let light = lights.and_then(|l| l.get(light_index));
+        let record = light.and_then(|l| {
+            let (forward, _) = place?;
+            light_record(l, light_index as u32, index as u32, position, forward, ctx.input)
+        });
+        match (light, record) {
+            (Some(l), Some(record)) => builder.add_light(l.name.as_deref().unwrap_or(node_name), record),
+            _ => ctx.warn(
+                builder,
+                format!("node {index}: light {light_index} skipped (its node transform is singular, or its parameters are invalid)"),
+            ),
+        }
+    }
+}
+
+fn normalized(v: [f64; 3]) -> Option<[f64; 3]> {
+    let len = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+    (len.is_finite() && len > 1e-12).then(|| v.map(|c| c / len))
+}
+
+/// The CAMERAS record of a camera (names are filled in by the builder), or `None` if its
+/// parameters are outside glTF's ranges.
+fn camera_record(
+    camera: &gl::json::camera::Camera,
+    camera_index: u32,
+    node: u32,
+    position: [f64; 3],
+    forward: [f64; 3],
+    up: [f64; 3],
+    input: u32,
+) -> Option<CameraRecord> {
+    use gl::json::camera::Type;
+    use gl::json::validation::Checked;
+    let ok = |v: f32| v.is_finite() && v >= 0.0;
+    let mut record = CameraRecord {
+        kind: 0,
+        input,
+        camera: camera_index,
+        node,
+        name_offset: 0,
+        name_length: 0,
+        position: position.map(|c| c as f32),
+        forward: forward.map(|c| c as f32),
+        up: up.map(|c| c as f32),
+        yfov: 0.0,
+        aspect_ratio: 0.0,
+        znear: 0.0,
+        zfar: 0.0,
+        xmag: 0.0,
+        ymag: 0.0,
+        reserved: 0,
+    };
+    match camera.type_ {
+        Checked::Valid(Type::Perspective) => {
+            let p = camera.perspective.as_ref()?;
+            let (aspect, zfar) = (p.aspect_ratio.unwrap_or(0.0), p.zfar.unwrap_or(0.0));
+            if !(p.yfov > 0.0 && p.yfov < std::f32::consts::PI && ok(aspect) && ok(p.znear) && ok(zfar)) {
+                return None;
+            }
+            record.kind = camera_kind::PERSPECTIVE;
+            (record.yfov, record.aspect_ratio, record.znear, record.zfar) = (p.yfov, aspect, p.znear, zfar);
+        }
+        Checked::Valid(Type::Orthographic) => {
+            let o = camera.orthographic.as_ref()?;
+            let (xmag, ymag) = (o.xmag.abs(), o.ymag.abs());
+            if !(xmag > 0.0 && ymag > 0.0 && xmag.is_finite() && ymag.is_finite() && ok(o.znear) && ok(o.zfar)) {
+                return None;
+            }
+            record.kind = camera_kind::ORTHOGRAPHIC;
+            (record.xmag, record.ymag, record.znear, record.zfar) = (xmag, ymag, o.znear, o.zfar);
+        }
+        Checked::Invalid => return None,
+    }
+    Some(record)
+}
+
+/// The LIGHTS record of a `KHR_lights_punctual` light, or `None` if its parameters are outside
+/// the extension's ranges.
+fn light_record(
+    light: &gl::json::extensions::scene::khr_lights_punctual::Light,
+    light_index: u32,
+    node: u32,
+    position: [f64; 3],
+    direction: [f64; 3],
+    input: u32,
+) -> Option<LightRecord> {
+    use gl::json::extensions::scene::khr_lights_punctual::Type;
+    use gl::json::validation::Checked;
+    let ok = |v: f32| v.is_finite() && v >= 0.0;
+    let range = light.range.unwrap_or(0.0);
+    if !(light.color.iter().all(|&c| ok(c)) && ok(light.intensity) && ok(range)) {
+        return None;
+    }
+    let (kind, inner, outer) = match light.type_ {
+        Checked::Valid(Type::Point) => (light_kind::POINT, 0.0, 0.0),
+        Checked::Valid(Type::Directional) => (light_kind::DIRECTIONAL, 0.0, 0.0),
+        Checked::Valid(Type::Spot) => {
+            let spot = light.spot.as_ref()?;
+            let (inner, outer) = (spot.inner_cone_angle, spot.outer_cone_angle);
+            if !(inner >= 0.0 && inner < outer && outer <= std::f32::consts::FRAC_PI_2) {
+                return None;
+            }
+            (light_kind::SPOT, inner, outer)
+        }
+        Checked::Invalid => return None,
+    };
+    Some(LightRecord {
+        kind,
+        input,
+        light: light_index,
+        node,
+        name_offset: 0,
+        name_length: 0,
+        position: position.map(|c| c as f32),
+        direction: direction.map(|c| c as f32),
+        color: light.color,
+        intensity: light.intensity,
+        range,
+        inner_cone: inner,
+        outer_cone: outer,
+        reserved: 0,
+    })
 }
 
 /// Imports one primitive instanced by node `node`.

@@ -8,10 +8,11 @@
 //! normal index overflows its arithmetic (a panic in checked builds), its MTL parser panics on a
 //! short colour line, and its errors carry neither a line number nor the offending index. So the
 //! text is checked here first — UTF-8, vertex lines, face indices against the vertices of the file —
-//! and the MTL libraries are read by a small parser of our own that keeps only material names (the
-//! material index is all a source records).
+//! and the MTL libraries are read by a small parser of our own ([`parse_mtl`]), which hands tobj
+//! only the material names (to number them as sources record them) and maps each material to the
+//! Whitted model of MATERIALS (`formats/vlf.md` §5.10).
 
-use crate::scene::{ImportError, SceneBuilder, SourceDesc};
+use crate::scene::{ImportError, MaterialDesc, SceneBuilder, SourceDesc};
 use std::borrow::Cow;
 use std::cell::{Cell, RefCell};
 use std::path::Path;
@@ -61,6 +62,8 @@ pub(super) fn import(builder: &mut SceneBuilder, input: u32, path: &Path, bytes:
     let base = path.parent().unwrap_or(Path::new(""));
     let warnings = RefCell::new(Vec::new());
     let loaded_libraries = Cell::new(0usize);
+    // The materials of every library tobj merged, in its order (the order of material indices).
+    let parsed = RefCell::new(Vec::<MaterialDesc>::new());
     // tobj's `merging`/`reordering` features (off here, but a workspace crate could unify them
     // on) add fields whose defaults are what we want.
     #[allow(clippy::needless_update)]
@@ -78,12 +81,29 @@ pub(super) fn import(builder: &mut SceneBuilder, input: u32, path: &Path, bytes:
                 Err(e) => Err(format!("cannot read it ({e})")),
                 Ok(b) => match std::str::from_utf8(&b) {
                     Err(_) => Err("it is not UTF-8 text".to_string()),
-                    Ok(t) => material_names(t),
+                    Ok(t) => parse_mtl(t),
                 },
             };
             match loaded {
-                Ok(names) => {
+                Ok(parsed_library) => {
                     loaded_libraries.set(loaded_libraries.get() + 1);
+                    for problem in &parsed_library.problems {
+                        warnings.borrow_mut().push(format!(
+                            "{}: material library {:?}: {problem}; the statement is ignored",
+                            path.display(),
+                            library.display().to_string()
+                        ));
+                    }
+                    if parsed_library.textures > 0 {
+                        warnings.borrow_mut().push(format!(
+                            "{}: material library {:?}: {} texture map statement(s) ignored (materials are constant colours)",
+                            path.display(),
+                            library.display().to_string(),
+                            parsed_library.textures
+                        ));
+                    }
+                    let names: Vec<String> = parsed_library.materials.iter().map(|m| m.name.clone()).collect();
+                    parsed.borrow_mut().extend(parsed_library.materials);
                     let map = names.iter().enumerate().map(|(i, n)| (n.clone(), i)).collect();
                     Ok((names.into_iter().map(|name| tobj::Material { name, ..Default::default() }).collect(), map))
                 }
@@ -101,6 +121,11 @@ pub(super) fn import(builder: &mut SceneBuilder, input: u32, path: &Path, bytes:
 
     let mut warnings = warnings.into_inner();
     let materials = materials.unwrap_or_default();
+    let parsed = parsed.into_inner();
+    debug_assert_eq!(parsed.len(), materials.len(), "tobj merges the libraries we parsed, in order");
+    for (index, material) in parsed.iter().enumerate() {
+        builder.add_material(input, index as u32, material);
+    }
     let undefined: Vec<&str> =
         scan.usemtl.iter().copied().filter(|name| !materials.iter().any(|m| m.name == *name)).collect();
     if !undefined.is_empty() {
@@ -344,20 +369,142 @@ fn scan<'a>(path: &Path, text: &'a str) -> Result<Scan<'a>, ImportError> {
     Ok(scan)
 }
 
-/// The material names of an MTL library, in order (tobj gives a duplicated name the later index).
-fn material_names(text: &str) -> Result<Vec<String>, String> {
-    let mut names = Vec::new();
-    for (n, line) in text.lines().enumerate() {
-        let line = line.trim();
-        if line.split_whitespace().next() == Some("newmtl") {
-            let name = line["newmtl".len()..].trim();
-            if name.is_empty() {
-                return Err(format!("line {}: newmtl without a name", n + 1));
-            }
-            names.push(name.to_string());
+/// What [`parse_mtl`] read from one MTL library.
+struct MtlLibrary {
+    /// Every `newmtl`, in order (tobj gives a duplicated name the later index).
+    materials: Vec<MaterialDesc>,
+    /// `map_*`, `bump`, `disp`, `decal` and `refl` statements, which are ignored.
+    textures: usize,
+    /// Malformed statements, one line each naming the line: ignored, with a warning.
+    problems: Vec<String>,
+}
+
+/// The statements of one `newmtl` block that the Whitted model uses; `None` = not given.
+#[derive(Default)]
+struct MtlBlock {
+    name: String,
+    kd: Option<[f32; 3]>,
+    ks: Option<[f32; 3]>,
+    ke: Option<[f32; 3]>,
+    tf: Option<[f32; 3]>,
+    ns: Option<f32>,
+    ni: Option<f32>,
+    /// Dissolve: `d`, or `1 − Tr`; the later statement wins.
+    d: Option<f32>,
+    illum: Option<u32>,
+}
+
+impl MtlBlock {
+    /// The mapping of `formats/vlf.md` §5.10 (OBJ).
+    fn to_material(&self) -> MaterialDesc {
+        let d = self.d.unwrap_or(1.0);
+        let kd = self.kd.unwrap_or([0.8; 3]);
+        let ks = self.ks.unwrap_or([0.0; 3]);
+        let tf = self.tf.unwrap_or([1.0; 3]);
+        let illum = self.illum.unwrap_or(2);
+        MaterialDesc {
+            name: self.name.clone(),
+            diffuse: kd.map(|c| d * c),
+            shininess: self.ns.unwrap_or(1.0).clamp(1.0, 4096.0),
+            specular: if illum >= 2 { ks } else { [0.0; 3] },
+            ior: self.ni.unwrap_or(1.0),
+            reflection: if (3..=7).contains(&illum) { ks } else { [0.0; 3] },
+            transmission: tf.map(|c| (1.0 - d) * c),
+            emission: self.ke.unwrap_or([0.0; 3]),
         }
     }
-    Ok(names)
+}
+
+/// Parses an MTL library: every `newmtl` and the statements of §5.10 (`Kd Ks Ke Tf Ns Ni d Tr
+/// illum`). Other statements (`Ka`, PBR extensions, texture maps) are ignored; statements before
+/// the first `newmtl` too. A malformed statement is skipped and described in `problems`; only a
+/// `newmtl` without a name, which would renumber the materials, fails the library.
+fn parse_mtl(text: &str) -> Result<MtlLibrary, String> {
+    let mut library = MtlLibrary { materials: Vec::new(), textures: 0, problems: Vec::new() };
+    let mut current: Option<MtlBlock> = None;
+    for (n, line) in text.lines().enumerate() {
+        let n = n + 1;
+        let line = line.trim();
+        let mut words = line.split_whitespace();
+        let Some(keyword) = words.next() else { continue };
+        if keyword == "newmtl" {
+            let name = line["newmtl".len()..].trim();
+            if name.is_empty() {
+                return Err(format!("line {n}: newmtl without a name"));
+            }
+            if let Some(done) = current.replace(MtlBlock { name: name.to_string(), ..Default::default() }) {
+                library.materials.push(done.to_material());
+            }
+            continue;
+        }
+        if keyword.starts_with("map_") || matches!(keyword, "bump" | "disp" | "decal" | "refl") {
+            library.textures += 1;
+            continue;
+        }
+        let Some(block) = current.as_mut() else { continue };
+        let args: Vec<&str> = words.collect();
+        if let Err(problem) = mtl_statement(block, keyword, &args) {
+            library.problems.push(format!("line {n}: {problem}: {line:?}"));
+        }
+    }
+    if let Some(done) = current {
+        library.materials.push(done.to_material());
+    }
+    Ok(library)
+}
+
+/// Applies one statement of a `newmtl` block, or says what is wrong with it.
+fn mtl_statement(block: &mut MtlBlock, keyword: &str, args: &[&str]) -> Result<(), String> {
+    let number = |s: &str| s.parse::<f32>().ok().filter(|v| v.is_finite());
+    let scalar = |lo: f32, hi: f32| -> Result<f32, String> {
+        match args {
+            [v] => number(v)
+                .filter(|v| (lo..=hi).contains(v))
+                .ok_or_else(|| format!("{keyword} needs one number in [{lo}, {hi}]")),
+            _ => Err(format!("{keyword} needs one number")),
+        }
+    };
+    match keyword {
+        "Kd" | "Ks" | "Ke" | "Tf" => {
+            let values: Option<Vec<f32>> = args.iter().map(|a| number(a).filter(|v| *v >= 0.0)).collect();
+            let colour = match values.as_deref() {
+                Some(&[v]) => [v; 3],
+                Some(&[r, g, b]) => [r, g, b],
+                _ => {
+                    return Err(format!(
+                        "{keyword} needs one or three non-negative numbers (spectral and xyz colours are not supported)"
+                    ));
+                }
+            };
+            let slot = match keyword {
+                "Kd" => &mut block.kd,
+                "Ks" => &mut block.ks,
+                "Ke" => &mut block.ke,
+                _ => &mut block.tf,
+            };
+            *slot = Some(colour);
+        }
+        "Ns" => block.ns = Some(scalar(0.0, f32::MAX)?),
+        "Ni" => block.ni = Some(scalar(1e-3, 1e3)?),
+        "d" => {
+            // `d -halo factor` makes dissolve depend on the view; we take the factor.
+            let factor = match args {
+                ["-halo", v] | [v] => number(v).filter(|v| (0.0..=1.0).contains(v)),
+                _ => None,
+            };
+            block.d = Some(factor.ok_or("d needs one number in [0, 1]")?);
+        }
+        "Tr" => block.d = Some(1.0 - scalar(0.0, 1.0)?),
+        "illum" => {
+            let illum = match args {
+                [v] => v.parse::<u32>().ok().filter(|i| *i <= 10),
+                _ => None,
+            };
+            block.illum = Some(illum.ok_or("illum needs an integer from 0 to 10")?);
+        }
+        _ => {}
+    }
+    Ok(())
 }
 
 /// tobj's error with what it usually means.

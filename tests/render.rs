@@ -1,0 +1,168 @@
+//! Image tests of the renderer (`crates/vlf-render`): small frames of the fixture room against
+//! reference pictures checked into `fixtures/expected/`, and the same frame, bit for bit, from the
+//! field, the kd-tree baseline and brute force, from fields baked with different parameters, and
+//! on any number of threads.
+//!
+//! Regenerate the reference pictures with `UPDATE_EXPECT=1 cargo test -p vlf-tests --test render`
+//! and look at them before committing.
+
+use std::path::Path;
+use vlf_bake::{BakeConfig, DepthPolicy, NoProgress, import};
+use vlf_geom::BruteForce;
+use vlf_kdtree::{KdParams, KdTree};
+use vlf_render::{Frame, Light, Scene, SceneOptions, Settings, Tracer, View, default_lights, render};
+use vlf_runtime::Field;
+use vlf_tests::fixtures;
+
+const WIDTH: u32 = 64;
+const HEIGHT: u32 = 48;
+
+fn settings() -> Settings {
+    Settings { width: WIDTH, height: HEIGHT, samples: 1, ..Settings::default() }
+}
+
+/// Bakes the fixture meshes `inputs` with `directions` × `tiles²` into `dir`.
+fn bake(dir: &Path, inputs: &[&str], directions: u32, tiles: u32) -> Field {
+    let paths: Vec<_> = inputs.iter().map(|i| fixtures().join("meshes").join(i)).collect();
+    let scene = import::import_paths(&paths).unwrap();
+    let config = BakeConfig {
+        directions: Some(directions),
+        tiles: Some(tiles),
+        depth: DepthPolicy { leaf_size: 4, max_depth: 6 },
+        ..BakeConfig::default()
+    };
+    let path = dir.join(format!("scene-{directions}-{tiles}.vlf"));
+    vlf_bake::bake_scene(&scene, &config, &path, &NoProgress).unwrap();
+    Field::open(&path).unwrap()
+}
+
+/// The OBJ room seen through its open side, under the default lights.
+fn obj_view() -> View {
+    View::look_at([0.0, 12.0, 48.0], [0.0, 12.0, 0.0], [0.0, 1.0, 0.0], 37.8, WIDTH as f64 / HEIGHT as f64)
+}
+
+fn frame(tracer: &(impl Tracer + ?Sized), scene: &Scene, view: &View, lights: &[Light]) -> Frame {
+    render(tracer, scene, view, lights, &settings(), &|_| {})
+}
+
+/// The glTF room through its own camera, under its own lights.
+fn gltf_view_and_lights(field: &Field) -> (View, Vec<Light>) {
+    let camera = field.cameras().next().expect("the glTF room has a camera");
+    let view = View::from_scene_camera(&camera, WIDTH as f64 / HEIGHT as f64).unwrap();
+    let lights: Vec<Light> = field.lights().filter_map(|l| Light::from_scene_light(&l)).collect();
+    assert_eq!(lights.len(), 2);
+    (view, lights)
+}
+
+/// Compares 8-bit RGB `actual` with the reference PNG `name`, or rewrites it when UPDATE_EXPECT
+/// is set. Floating point and libm may differ a little across machines: every channel may be off
+/// by 3, and at most 1% of the pixels by more (a shadow or refraction edge moving by a pixel).
+fn expect_image(name: &str, actual: &[u8]) {
+    let path = fixtures().join("expected").join(name);
+    if std::env::var_os("UPDATE_EXPECT").is_some() {
+        std::fs::write(&path, vlf_render::encode_png(WIDTH, HEIGHT, actual).unwrap()).unwrap();
+        return;
+    }
+    let bytes = std::fs::read(&path)
+        .unwrap_or_else(|_| panic!("missing {}; run with UPDATE_EXPECT=1 to create it", path.display()));
+    let (w, h, expected) = vlf_render::decode_png(&bytes).unwrap();
+    assert_eq!((w, h), (WIDTH, HEIGHT), "{name} has another size");
+    let mut off = 0;
+    let mut worst = 0;
+    for (a, e) in actual.chunks_exact(3).zip(expected.chunks_exact(3)) {
+        let d = a.iter().zip(e).map(|(x, y)| x.abs_diff(*y)).max().unwrap();
+        worst = worst.max(d);
+        off += (d > 3) as usize;
+    }
+    let allowed = (WIDTH * HEIGHT) as usize / 100;
+    assert!(
+        off <= allowed,
+        "{name}: {off} pixels differ by more than 3 (at most {allowed} may; the worst by {worst}); if the change is deliberate, rerun with UPDATE_EXPECT=1 and look at the picture"
+    );
+}
+
+#[test]
+fn the_obj_room_matches_its_reference_picture() {
+    let dir = tempfile::tempdir().unwrap();
+    let field = bake(dir.path(), &["cornell/cornell.obj"], 33, 16);
+    let scene = Scene::from_field(&field, &SceneOptions::default());
+    let view = obj_view();
+    let (center, radius) = field.bounding_sphere();
+    let f = frame(&field, &scene, &view, &default_lights(&view, center, radius));
+    // The picture exercises every kind of ray: shadows, the mirror block, the glass ball.
+    assert!(f.rays.shadow > 0 && f.rays.reflection > 0 && f.rays.refraction > 0, "{:?}", f.rays);
+    assert_eq!(f.rays.primary, (WIDTH * HEIGHT) as u64);
+    expect_image("cornell-obj-64x48.png", &vlf_render::to_srgb8(&f, 1.0));
+}
+
+#[test]
+fn the_gltf_room_with_the_bunny_matches_its_reference_picture() {
+    let dir = tempfile::tempdir().unwrap();
+    let field = bake(dir.path(), &["cornell/cornell.gltf", "bunny.obj"], 33, 16);
+    let scene = Scene::from_field(&field, &SceneOptions::default());
+    let (view, lights) = gltf_view_and_lights(&field);
+    let f = frame(&field, &scene, &view, &lights);
+    assert!(f.rays.shadow > 0 && f.rays.reflection > 0 && f.rays.refraction > 0, "{:?}", f.rays);
+    expect_image("cornell-gltf-bunny-64x48.png", &vlf_render::to_srgb8(&f, 1.0));
+}
+
+/// The field, the kd-tree and brute force share the triangle kernel and return the same hits, so
+/// they render the same frame; so do fields baked with other parameters, and any thread count.
+#[test]
+fn field_kdtree_and_brute_force_render_identical_frames() {
+    let dir = tempfile::tempdir().unwrap();
+    let field = bake(dir.path(), &["cornell/cornell.obj"], 33, 16);
+    let scene = Scene::from_field(&field, &SceneOptions::default());
+    let view = obj_view();
+    let (center, radius) = field.bounding_sphere();
+    let lights = default_lights(&view, center, radius);
+    let reference = frame(&field, &scene, &view, &lights);
+
+    let kdtree = KdTree::build(scene.triangles(), KdParams::default());
+    let brute = BruteForce { triangles: scene.triangles() };
+    let other_field = bake(dir.path(), &["cornell/cornell.obj"], 129, 48);
+    let one_thread = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+    let candidates: [(&str, Frame); 4] = [
+        ("kd-tree", frame(&kdtree, &scene, &view, &lights)),
+        ("brute force", frame(&brute, &scene, &view, &lights)),
+        ("a field of 129 directions × 48² tiles", frame(&other_field, &scene, &view, &lights)),
+        ("one thread", one_thread.install(|| frame(&field, &scene, &view, &lights))),
+    ];
+    for (what, f) in candidates {
+        let differing = f.color.iter().zip(&reference.color).filter(|(a, b)| a != b).count();
+        assert_eq!(differing, 0, "{what}: {differing} pixels differ from the field's frame");
+        assert_eq!(f.rays, reference.rays, "{what}: other rays were traced");
+    }
+    // The work differs: that is the point of an acceleration structure.
+    let brute_tests = frame(&brute, &scene, &view, &lights).total_work.triangle_tests;
+    assert!(reference.total_work.triangle_tests * 10 < brute_tests, "the field tested nearly every triangle");
+}
+
+/// The work picture: black where rays missed everything, brightest where the glass ball
+/// multiplies the rays, on the scale it reports.
+#[test]
+fn the_work_picture_shows_where_the_tests_go() {
+    let dir = tempfile::tempdir().unwrap();
+    let field = bake(dir.path(), &["cornell/cornell.obj"], 33, 16);
+    let scene = Scene::from_field(&field, &SceneOptions::default());
+    let view = obj_view();
+    let (center, radius) = field.bounding_sphere();
+    let f = frame(&field, &scene, &view, &default_lights(&view, center, radius));
+    let metric = vlf_render::WorkMetric::TriangleTests;
+    let image = vlf_render::work_image(&f, metric, None);
+    assert_eq!(image.rgb.len(), (WIDTH * HEIGHT * 3) as usize);
+    let tests: Vec<u64> = f.work.iter().map(|w| w.triangle_tests).collect();
+    assert_eq!(tests.iter().sum::<u64>(), f.total_work.triangle_tests);
+    assert_eq!(image.max, *tests.iter().max().unwrap());
+    assert!(image.scale_max <= image.max && image.scale_max > 0);
+    // The busiest pixel is drawn in the top colour of the scale, an idle one black.
+    let busiest = tests.iter().position(|&t| t == image.max).unwrap();
+    assert_eq!(image.rgb[3 * busiest..3 * busiest + 3], vlf_render::inferno(1.0));
+    if let Some(idle) = tests.iter().position(|&t| t == 0) {
+        assert_eq!(image.rgb[3 * idle..3 * idle + 3], vlf_render::inferno(0.0));
+    }
+    // A fixed scale clips: everything above it is drawn at the top colour.
+    let clipped = vlf_render::work_image(&f, metric, Some(1));
+    assert_eq!(clipped.scale_max, 1);
+    assert!(tests.iter().zip(clipped.rgb.chunks_exact(3)).all(|(&t, c)| (t == 0) || c == vlf_render::inferno(1.0)));
+}
