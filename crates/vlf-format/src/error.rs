@@ -46,9 +46,7 @@ pub enum FormatError {
     NonZeroPadding { offset: u64, value: u8 },
     #[error("section {kind} does not decode: {problem}")]
     Decode { kind: String, problem: String },
-    #[error(
-        "the field unpacks to {bytes} bytes, more than the limit of {limit} bytes set for decoding it in memory"
-    )]
+    #[error("the field unpacks to {bytes} bytes, more than the limit of {limit} bytes set for decoding it in memory")]
     UnpackedTooLarge { bytes: u64, limit: u64 },
     #[error("cannot allocate {bytes} bytes to hold the field in memory")]
     OutOfMemory { bytes: u64 },

@@ -134,10 +134,6 @@ pub fn check_padding(file: &mut (impl Read + Seek), table: &[SectionEntry]) -> R
     Ok(())
 }
 
-fn decode_error(e: &SectionEntry, problem: String) -> FormatError {
-    FormatError::Decode { kind: kind_name(e.kind), problem }
-}
-
 fn check_hash(e: &SectionEntry, computed: [u8; 32]) -> Result<(), FormatError> {
     if computed == e.raw_hash {
         Ok(())
@@ -151,11 +147,7 @@ fn check_hash(e: &SectionEntry, computed: [u8; 32]) -> Result<(), FormatError> {
 }
 
 /// Reads exactly `length` bytes from `from` in chunks, passing each to `each`.
-fn for_each_chunk(
-    from: &mut dyn Read,
-    length: u64,
-    each: &mut dyn FnMut(&[u8]) -> io::Result<()>,
-) -> io::Result<()> {
+fn for_each_chunk(from: &mut dyn Read, length: u64, each: &mut dyn FnMut(&[u8]) -> io::Result<()>) -> io::Result<()> {
     let mut buf = vec![0u8; CHUNK.min(length as usize)];
     let mut left = length;
     while left > 0 {
@@ -193,6 +185,10 @@ mod with_zstd {
     use std::io::Write;
     use zstd::stream::raw::{Decoder, InBuffer, Operation, OutBuffer};
     use zstd::zstd_safe;
+
+    fn decode_error(e: &SectionEntry, problem: String) -> FormatError {
+        FormatError::Decode { kind: kind_name(e.kind), problem }
+    }
 
     /// A `Write` adapter that counts bytes.
     struct Counting<W> {
@@ -330,10 +326,11 @@ mod with_zstd {
             .into());
         }
         if decoded != e.raw_length {
-            return Err(
-                decode_error(e, format!("decodes to {decoded} bytes, the table says raw_length {}", e.raw_length))
-                    .into(),
-            );
+            return Err(decode_error(
+                e,
+                format!("decodes to {decoded} bytes, the table says raw_length {}", e.raw_length),
+            )
+            .into());
         }
         Ok(check_hash(e, *hasher.finalize().as_bytes())?)
     }
