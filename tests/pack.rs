@@ -235,11 +235,15 @@ fn lying_raw_lengths_and_hashes_are_named_by_open_verify_and_unpack() {
         ("raw_length one element short", with_table(&bytes, |t| t[i].raw_length -= el), "does not decode"),
         ("raw_length one element long", with_table(&bytes, |t| t[i].raw_length += el), "does not decode"),
         ("raw_hash", with_table(&bytes, |t| t[i].raw_hash[0] ^= 1), "BLAKE3"),
-        ("compressed payload", {
-            let mut b = bytes.clone();
-            b[(e.offset + e.stored_length / 2) as usize] ^= 0x40;
-            b
-        }, ""),
+        (
+            "compressed payload",
+            {
+                let mut b = bytes.clone();
+                b[(e.offset + e.stored_length / 2) as usize] ^= 0x40;
+                b
+            },
+            "",
+        ),
     ];
     for (what, damaged, says) in cases {
         let open = Field::from_bytes(&damaged).err().unwrap_or_else(|| panic!("{what}: opened")).to_string();
@@ -272,8 +276,8 @@ fn a_decompression_bomb_is_refused_before_or_without_allocating_its_claim() {
     // before anything is allocated.
     let huge = with_table(&bytes, |t| {
         for e in t.iter_mut().filter(|e| e.codec == codec::ZSTD) {
-            e.raw_length = e.stored_length * vlf_format::MAX_ZSTD_EXPANSION / e.element_size as u64
-                * e.element_size as u64;
+            e.raw_length =
+                e.stored_length * vlf_format::MAX_ZSTD_EXPANSION / e.element_size as u64 * e.element_size as u64;
         }
     });
     let (huge_header, _) = vlf_format::pack::unpacked_layout(&head(&huge).0, &head(&huge).1).unwrap();
@@ -333,4 +337,3 @@ fn a_ray_through_a_packed_field_from_bytes_matches_the_box() {
     let hit = field.closest_hit(&Ray::new([0.5, 0.5, 10.0], [0.0, 0.0, -1.0])).unwrap();
     assert_eq!(hit.t, 7.0);
 }
-
