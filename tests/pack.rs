@@ -109,9 +109,11 @@ fn bits(h: Option<Hit>) -> Option<(u32, u32, u32, u32)> {
 #[test]
 fn a_packed_field_opens_and_answers_exactly_like_the_raw_field() {
     let dir = tempfile::tempdir().unwrap();
-    let raw_path = bake(&mesh("bunny.obj"), dir.path(), "bunny.vlf", 129, 32, DEFAULT_DEPTH);
+    // Over 8 MiB, so that opening decodes on several threads.
+    let raw_path = bake(&mesh("bunny.obj"), dir.path(), "bunny.vlf", 129, 64, DEFAULT_DEPTH);
     let packed_path = pack_at(&raw_path, 3);
     let raw = Field::open(&raw_path).unwrap();
+    assert!(raw.len_bytes() > 8 << 20);
     assert!(!raw.is_packed() && raw.packed_layout().is_none());
     let packed_bytes = std::fs::read(&packed_path).unwrap();
     let opened = [
@@ -137,6 +139,17 @@ fn a_packed_field_opens_and_answers_exactly_like_the_raw_field() {
     }
     // The full verification passes on the decoded field and the packed file.
     full_check(&packed_bytes).unwrap();
+    // With several damaged sections, the first in table order is named, whichever thread saw it.
+    let (_, table) = head(&packed_bytes);
+    let mut damaged = packed_bytes.clone();
+    for e in table.iter().filter(|e| e.codec == codec::ZSTD && e.stored_length > 1000) {
+        damaged[(e.offset + e.stored_length / 2) as usize] ^= 0x10;
+    }
+    let first = table.iter().find(|e| e.codec == codec::ZSTD && e.stored_length > 1000).unwrap();
+    for _ in 0..5 {
+        let err = Field::from_bytes(&damaged).err().expect("damaged sections opened").to_string();
+        assert!(err.contains(&format!("section {} ", vlf_format::kind_name(first.kind))), "{err}");
+    }
     let bounded = OpenOptions::new().max_unpacked_bytes(packed_bytes.len() as u64).open(&packed_path);
     assert!(
         matches!(&bounded, Err(OpenError::Format { error: FormatError::UnpackedTooLarge { .. }, .. })),
