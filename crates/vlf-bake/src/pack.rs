@@ -143,13 +143,13 @@ pub fn pack_path(input: &Path, output: &Path, level: i32, progress: &dyn Progres
     let mut order: Vec<usize> = (0..table.len()).collect();
     order.sort_by_key(|&i| std::cmp::Reverse(table[i].raw_length));
     progress.begin("packing", header.file_length);
-    let compressed: Result<Vec<(usize, Option<(File, u64)>)>, PackError> = order
+    let compressed: Result<Vec<(usize, Option<Spill>)>, PackError> = order
         .par_iter()
         .with_max_len(1)
         .map(|&i| compress_section(input, &table[i], level, &dir, progress).map(|spill| (i, spill)))
         .collect();
     progress.end();
-    let mut spills: Vec<Option<(File, u64)>> = (0..table.len()).map(|_| None).collect();
+    let mut spills: Vec<Option<Spill>> = (0..table.len()).map(|_| None).collect();
     for (i, spill) in compressed? {
         spills[i] = spill;
     }
@@ -211,6 +211,9 @@ pub fn pack_path(input: &Path, output: &Path, level: i32, progress: &dyn Progres
     })
 }
 
+/// A section's zstd frame in an anonymous temporary file, rewound, and its length.
+type Spill = (File, u64);
+
 /// Compresses one raw section of `input` into a spill file in `dir`; `None` if the frame would
 /// not be shorter than the raw bytes (the section stays raw).
 fn compress_section(
@@ -219,7 +222,7 @@ fn compress_section(
     level: i32,
     dir: &Path,
     progress: &dyn Progress,
-) -> Result<Option<(File, u64)>, PackError> {
+) -> Result<Option<Spill>, PackError> {
     let reading = || format!("cannot read {}", input.display());
     let spilling = || format!("cannot write a temporary file in {}", dir.display());
     let mut file = File::open(input).map_err(io_error(reading))?;
