@@ -350,3 +350,50 @@ fn a_ray_through_a_packed_field_from_bytes_matches_the_box() {
     let hit = field.closest_hit(&Ray::new([0.5, 0.5, 10.0], [0.0, 0.0, -1.0])).unwrap();
     assert_eq!(hit.t, 7.0);
 }
+
+/// Packing is generic over section kinds (§8.2): a field of a later minor version with a kind this
+/// code does not know packs, opens and unpacks byte for byte, the unknown section included.
+#[test]
+fn unknown_section_kinds_and_minor_versions_survive_packing() {
+    let dir = tempfile::tempdir().unwrap();
+    let raw = bake(&mesh("bunny.obj"), dir.path(), "bunny.vlf", 33, 16, DEFAULT_DEPTH);
+    let bytes = std::fs::read(&raw).unwrap();
+    let (mut header, table) = head(&bytes);
+    let mut sections: Vec<Vec<u8>> =
+        table.iter().map(|e| bytes[e.offset as usize..(e.offset + e.stored_length) as usize].to_vec()).collect();
+    let extra: Vec<u8> = (0..40_000u32).flat_map(|i| (i % 97).to_le_bytes()).collect();
+    let mut table = table.clone();
+    table.push(SectionEntry {
+        kind: 0x7000,
+        codec: codec::RAW,
+        offset: 0,
+        stored_length: extra.len() as u64,
+        raw_length: extra.len() as u64,
+        element_size: 4,
+        reserved: 0,
+        raw_hash: *blake3::hash(&extra).as_bytes(),
+    });
+    sections.push(extra);
+    header.version_minor = 7;
+    let header = vlf_format::pack::lay_out(&header, &mut table).unwrap();
+    let mut future = vlf_format::pack::head_bytes(&header, &table);
+    for (e, section) in table.iter().zip(&sections) {
+        future.resize(e.offset as usize, 0);
+        future.extend_from_slice(section);
+    }
+    let future_path = dir.path().join("future.vlf");
+    std::fs::write(&future_path, &future).unwrap();
+    Field::open(&future_path).expect("a reader skips kinds it does not know");
+
+    let packed = pack_at(&future_path, 3);
+    let packed_bytes = std::fs::read(&packed).unwrap();
+    let (packed_header, packed_table) = head(&packed_bytes);
+    assert_eq!(packed_header.version_minor, 7);
+    let unknown = packed_table.iter().find(|e| e.kind == 0x7000).expect("the unknown section is kept");
+    assert_eq!(unknown.codec, codec::ZSTD, "the unknown section is compressed like any other");
+    let field = Field::open(&packed).unwrap();
+    assert!(field.is_packed() && field.reader().bytes == &future[..]);
+    let back = dir.path().join("back.vlf");
+    pack::unpack_path(&packed, &back, &NoProgress).unwrap();
+    assert!(std::fs::read(&back).unwrap() == future, "unpack did not restore the future field");
+}

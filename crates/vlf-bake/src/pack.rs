@@ -275,14 +275,8 @@ pub fn unpack_path(input: &Path, output: &Path, progress: &dyn Progress) -> Resu
         let mut w = BufWriter::with_capacity(1 << 20, out.file());
         w.write_all(&head).map_err(io_error(writing))?;
         let (mut in_pos, mut out_pos) = (in_head, head.len() as u64);
-        let mut gap = Vec::new();
         for (e, raw) in table.iter().zip(&raw_table) {
-            gap.resize((e.offset - in_pos) as usize, 0);
-            r.read_exact(&mut gap).map_err(io_error(reading))?;
-            if let Some(i) = gap.iter().position(|&b| b != 0) {
-                let error = FormatError::NonZeroPadding { offset: in_pos + i as u64, value: gap[i] };
-                return Err(PackError::Format { path: input.to_path_buf(), error });
-            }
+            pack::skip_zeros(&mut r, in_pos, e.offset - in_pos).map_err(stream_error(input, reading))?;
             io::copy(&mut io::repeat(0).take(raw.offset - out_pos), &mut w).map_err(io_error(writing))?;
             let mut advance = |n| progress.advance(n);
             if e.codec == codec::RAW {

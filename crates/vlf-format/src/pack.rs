@@ -121,15 +121,26 @@ pub fn read_head(file: &mut (impl Read + Seek)) -> Result<(Header, Vec<SectionEn
 /// is zero (§1): the bytes between the table and the first section and between sections.
 pub fn check_padding(file: &mut (impl Read + Seek), table: &[SectionEntry]) -> Result<(), StreamError> {
     let mut pos = (HEADER_SIZE + TABLE_ENTRY_SIZE * table.len()) as u64;
-    let mut gap = Vec::new();
     for e in table {
-        gap.resize((e.offset - pos) as usize, 0);
         file.seek(SeekFrom::Start(pos))?;
-        file.read_exact(&mut gap)?;
-        if let Some(i) = gap.iter().position(|&b| b != 0) {
-            return Err(FormatError::NonZeroPadding { offset: pos + i as u64, value: gap[i] }.into());
-        }
+        skip_zeros(file, pos, e.offset - pos)?;
         pos = e.offset + e.stored_length;
+    }
+    Ok(())
+}
+
+/// Reads `length` bytes from `from`, which are the file's bytes from offset `at`, and checks that
+/// they are zero (padding), in bounded steps whatever the length.
+pub fn skip_zeros(from: &mut dyn Read, at: u64, length: u64) -> Result<(), StreamError> {
+    let mut buf = [0u8; 4096];
+    let mut done = 0u64;
+    while done < length {
+        let n = buf.len().min((length - done) as usize);
+        from.read_exact(&mut buf[..n])?;
+        if let Some(i) = buf[..n].iter().position(|&b| b != 0) {
+            return Err(FormatError::NonZeroPadding { offset: at + done + i as u64, value: buf[i] }.into());
+        }
+        done += n as u64;
     }
     Ok(())
 }
