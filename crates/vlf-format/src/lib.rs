@@ -6,7 +6,7 @@
 //!   independent of the file size and hands out typed slices;
 //! - [`writer`]: a writer that places sections in a file in place, each byte written once, with
 //!   big sections streamed or filled while others are written;
-//! - [`verify`]: the full verification behind `vlf-bake dump --verify`;
+//! - [`mod@verify`]: the full verification behind `vlf-bake dump --verify`;
 //! - [`shard`]: the shard files of sharded bakes (`formats/vlf-shard.md`);
 //! - [`pack`]: packed fields (zstd sections, §8): layouts, and with the `zstd` feature encoding and
 //!   decoding with every length and hash checked.

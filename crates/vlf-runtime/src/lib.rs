@@ -128,6 +128,7 @@ pub struct Provenance<'a> {
 }
 
 impl OpenOptions {
+    /// The defaults: no limit on a packed field's decoded size other than the format's own bound.
     pub fn new() -> OpenOptions {
         OpenOptions::default()
     }
