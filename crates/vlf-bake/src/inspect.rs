@@ -3,6 +3,7 @@
 
 use crate::bake::Statistics;
 use serde::Serialize;
+use vlf_format::pack::PackedLayout;
 use vlf_format::{FieldReader, FormatError, SectionKind, codec, hex, kind_name};
 use vlf_geom::Lattice;
 use vlf_geom::frame::frame;
@@ -58,7 +59,23 @@ pub struct Description {
     pub materials: usize,
     pub cameras: usize,
     pub lights: usize,
+    /// The sections as stored in the file (for a packed field: codecs and stored lengths).
     pub sections: Vec<SectionInfo>,
+    /// For a packed field (`formats/vlf.md` §8): what it unpacks to.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub packed: Option<PackedInfo>,
+}
+
+/// What a packed field unpacks to. `Description::file_bytes` and `content_hash` are the packed
+/// file's own.
+#[derive(Debug, Serialize)]
+pub struct PackedInfo {
+    /// The size of the raw field that `vlf-bake unpack` writes.
+    pub unpacked_bytes: u64,
+    /// Its content hash.
+    pub unpacked_content_hash: String,
+    /// `unpacked_bytes / file_bytes`.
+    pub ratio: f64,
 }
 
 /// Describes a field from its header, table and small sections.
@@ -66,21 +83,7 @@ pub fn describe(r: &FieldReader<'_>) -> Description {
     let h = r.header;
     let p = r.params;
     let s = r.scene;
-    let sections = r
-        .table
-        .iter()
-        .map(|e| SectionInfo {
-            kind: e.kind,
-            name: kind_name(e.kind),
-            codec: if e.codec == codec::RAW { "raw" } else { "zstd" },
-            offset: e.offset,
-            stored_length: e.stored_length,
-            raw_length: e.raw_length,
-            element_size: e.element_size,
-            elements: e.raw_length / e.element_size.max(1) as u64,
-            raw_hash: hex(&e.raw_hash),
-        })
-        .collect();
+    let sections = section_infos(r.table);
     let inputs = r
         .inputs
         .iter()
@@ -120,7 +123,40 @@ pub fn describe(r: &FieldReader<'_>) -> Description {
         cameras: r.cameras.len(),
         lights: r.lights.len(),
         sections,
+        packed: None,
     }
+}
+
+/// Describes a field decoded from a packed file (`vlf_runtime::Field::packed_layout`): the
+/// description of the decoded field, with the file's size, content hash and sections as stored.
+pub fn describe_packed(r: &FieldReader<'_>, layout: &PackedLayout) -> Description {
+    let mut d = describe(r);
+    d.packed = Some(PackedInfo {
+        unpacked_bytes: d.file_bytes,
+        unpacked_content_hash: d.content_hash,
+        ratio: d.file_bytes as f64 / layout.header.file_length as f64,
+    });
+    d.file_bytes = layout.header.file_length;
+    d.content_hash = hex(&layout.header.content_hash);
+    d.sections = section_infos(&layout.table);
+    d
+}
+
+fn section_infos(table: &[vlf_format::SectionEntry]) -> Vec<SectionInfo> {
+    table
+        .iter()
+        .map(|e| SectionInfo {
+            kind: e.kind,
+            name: kind_name(e.kind),
+            codec: if e.codec == codec::RAW { "raw" } else { "zstd" },
+            offset: e.offset,
+            stored_length: e.stored_length,
+            raw_length: e.raw_length,
+            element_size: e.element_size,
+            elements: e.raw_length / e.element_size.max(1) as u64,
+            raw_hash: hex(&e.raw_hash),
+        })
+        .collect()
 }
 
 /// The full verification: every byte (`vlf_format::verify`) plus the geometric sections against

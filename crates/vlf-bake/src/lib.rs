@@ -16,6 +16,7 @@ pub mod generate;
 pub mod import;
 pub mod inspect;
 pub mod job;
+pub mod pack;
 pub mod params;
 pub mod raster;
 pub mod report;

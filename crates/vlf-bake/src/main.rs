@@ -24,7 +24,7 @@ use vlf_runtime::{Field, Hit, Ray};
     about = "Bake triangle meshes into visibility fields that load instantly, and inspect, verify and trace them.",
     long_about = "Bake triangle meshes (OBJ, glTF, GLB) into a visibility field: a precomputed, memory-mappable \
 ray-tracing acceleration structure (Mortensen et al., \"A Visibility Field for Ray Tracing\"). A field is one \
-versioned, content-hashed file; bakes are reproducible to the byte.\n\nTypical use:\n  vlf-bake bake scene.glb -o scene.vlf\n  vlf-bake dump scene.vlf --verify\n  vlf-bake render scene.vlf -o scene.png\n  vlf-bake rays scene.vlf -o rays.bin && vlf-bake trace scene.vlf --rays rays.bin --out hits.bin --json"
+versioned, content-hashed file; bakes are reproducible to the byte.\n\nTypical use:\n  vlf-bake bake scene.glb -o scene.vlf\n  vlf-bake dump scene.vlf --verify\n  vlf-bake render scene.vlf -o scene.png\n  vlf-bake pack scene.vlf -o scene.packed.vlf   (for transport; `unpack` restores it)\n  vlf-bake rays scene.vlf -o rays.bin && vlf-bake trace scene.vlf --rays rays.bin --out hits.bin --json"
 )]
 struct Cli {
     #[command(subcommand)]
@@ -41,6 +41,10 @@ enum Command {
     Cache(CacheArgs),
     /// Describe a field: header, parameters, sections, statistics; --verify checks every byte.
     Dump(DumpArgs),
+    /// Compress a field for transport: sections stored as zstd frames (formats/vlf.md §8).
+    Pack(PackArgs),
+    /// Decompress a packed field back into the raw field, byte for byte.
+    Unpack(UnpackArgs),
     /// Trace a file of rays against a field and write one hit record per ray.
     Trace(TraceArgs),
     /// Write a rays file of primary rays for a camera that frames a field's scene.
@@ -201,7 +205,7 @@ enum CacheAction {
 
 #[derive(Args)]
 struct DumpArgs {
-    /// The field file.
+    /// The field file. A packed field is decoded in memory first, which is not instant.
     field: PathBuf,
     /// Print one JSON object instead of text.
     #[arg(long)]
@@ -212,6 +216,44 @@ struct DumpArgs {
     /// No progress bar during --verify.
     #[arg(short, long)]
     quiet: bool,
+}
+
+#[derive(Args)]
+struct PackArgs {
+    /// The raw field to pack.
+    field: PathBuf,
+    /// The packed field to write (replaced atomically). It is still a field: `dump`, `trace` and
+    /// the runtime open it (decoding it in memory first).
+    #[arg(short, long, value_name = "PACKED")]
+    output: PathBuf,
+    /// zstd level, from 1 (fastest) to 19 (smallest). The output does not depend on anything else.
+    #[arg(long, default_value_t = vlf_bake::pack::DEFAULT_LEVEL, value_name = "N",
+          value_parser = clap::value_parser!(i32).range(*vlf_bake::pack::LEVELS.start() as i64..=*vlf_bake::pack::LEVELS.end() as i64))]
+    level: i32,
+    /// Worker threads (default: RAYON_NUM_THREADS, else all cores); each compresses whole sections.
+    #[arg(long, value_name = "T")]
+    threads: Option<usize>,
+    /// No progress bar and no summary on success.
+    #[arg(short, long)]
+    quiet: bool,
+    /// Print the summary (sizes, ratio, MB/s, per-section codecs) as one JSON object.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Args)]
+struct UnpackArgs {
+    /// The packed field.
+    packed: PathBuf,
+    /// The raw field to write (replaced atomically).
+    #[arg(short, long, value_name = "FIELD")]
+    output: PathBuf,
+    /// No progress bar and no summary on success.
+    #[arg(short, long)]
+    quiet: bool,
+    /// Print the summary (sizes, ratio, MB/s) as one JSON object.
+    #[arg(long)]
+    json: bool,
 }
 
 #[derive(Args)]
@@ -396,6 +438,8 @@ fn run(cli: Cli) -> Result<()> {
         Command::Merge(a) => merge(&a),
         Command::Cache(a) => cache(&a),
         Command::Dump(a) => dump(&a),
+        Command::Pack(a) => with_threads(a.threads, || pack(&a)),
+        Command::Unpack(a) => unpack(&a),
         Command::Trace(a) => with_threads(a.threads, || trace(&a)),
         Command::Rays(a) => rays(&a),
         Command::Render(a) => with_threads(a.threads, || render(&a)),
@@ -629,6 +673,29 @@ fn merge(a: &MergeArgs) -> Result<()> {
     Ok(())
 }
 
+fn pack(a: &PackArgs) -> Result<()> {
+    let bar = Bar::new(a.quiet || a.json);
+    let s = vlf_bake::pack::pack_path(&a.field, &a.output, a.level, &bar)?;
+    if a.json {
+        stdout_line(&serde_json::to_string(&s)?)?;
+    } else if !a.quiet {
+        stdout_line(&format!(
+            "packed {} into {}: {} to {} ({:.2}×) at zstd level {} in {:.2} s ({:.0} MB/s)\n  content hash {}\n  unpacks to   {}",
+            s.input.display(),
+            s.output.display(),
+            human_bytes(s.raw_bytes),
+            human_bytes(s.packed_bytes),
+            s.ratio,
+            s.level,
+            s.seconds,
+            s.mb_per_s,
+            s.content_hash,
+            s.raw_content_hash
+        ))?;
+    }
+    Ok(())
+}
+
 fn cache(a: &CacheArgs) -> Result<()> {
     let env = std::env::var_os(vlf_bake::cache::CACHE_DIR_ENV).filter(|v| !v.is_empty()).map(PathBuf::from);
     let Some(dir) = a.cache_dir.clone().or(env) else {
@@ -714,12 +781,40 @@ fn human_duration(seconds: f64) -> String {
     }
 }
 
+fn unpack(a: &UnpackArgs) -> Result<()> {
+    let bar = Bar::new(a.quiet || a.json);
+    let s = vlf_bake::pack::unpack_path(&a.packed, &a.output, &bar)?;
+    if a.json {
+        stdout_line(&serde_json::to_string(&s)?)?;
+    } else if !a.quiet {
+        stdout_line(&format!(
+            "unpacked {} into {}: {} to {} in {:.2} s ({:.0} MB/s)\n  content hash {}",
+            s.input.display(),
+            s.output.display(),
+            human_bytes(s.packed_bytes),
+            human_bytes(s.raw_bytes),
+            s.seconds,
+            s.mb_per_s,
+            s.content_hash
+        ))?;
+    }
+    Ok(())
+}
+
 fn dump(a: &DumpArgs) -> Result<()> {
     let field = Field::open(&a.field)?;
-    let info = inspect::describe(field.reader());
+    let info = match field.packed_layout() {
+        Some(layout) => inspect::describe_packed(field.reader(), layout),
+        None => inspect::describe(field.reader()),
+    };
     let verified = if a.verify {
+        if let Some(layout) = field.packed_layout() {
+            // Opening decoded and hashed every section; the file's padding is all that is left.
+            vlf_bake::pack::check_packed_file(&a.field, layout)
+                .with_context(|| format!("{} failed verification", a.field.display()))?;
+        }
         let bar = Bar::new(a.quiet || a.json);
-        bar.begin("verifying", info.file_bytes);
+        bar.begin("verifying", field.len_bytes());
         let mut last = 0;
         let t = Instant::now();
         let result = inspect::verify(field.reader(), &mut |done, _| {
@@ -769,6 +864,15 @@ fn describe_text(d: &inspect::Description) -> String {
     line(format!("VLF field, format {}, {} ({} bytes)", d.format_version, human_bytes(d.file_bytes), d.file_bytes));
     line(format!("  content hash  {}", d.content_hash));
     line(format!("  input hash    {}", d.input_hash));
+    if let Some(p) = &d.packed {
+        line(format!(
+            "  packed        zstd, {:.2}× smaller than the raw field of {} ({} bytes)",
+            p.ratio,
+            human_bytes(p.unpacked_bytes),
+            p.unpacked_bytes
+        ));
+        line(format!("  unpacks to    content hash {}", p.unpacked_content_hash));
+    }
     line("scene".into());
     line(format!("  triangles     {} ({} degenerate dropped at import)", d.triangle_count, d.dropped_degenerate));
     line(format!(
@@ -815,17 +919,40 @@ fn describe_text(d: &inspect::Description) -> String {
     ));
     line(format!("  ids           {} in {} leaves", st.triangle_ids, st.leaves));
     line("sections".into());
-    line(format!("  {:<13} {:>5} {:>14} {:>14} {:>12}  {}", "kind", "codec", "offset", "bytes", "elements", "blake3"));
-    for e in &d.sections {
+    if d.packed.is_some() {
+        line(format!(
+            "  {:<13} {:>5} {:>14} {:>14} {:>14} {:>7} {:>12}  {}",
+            "kind", "codec", "offset", "stored", "raw", "ratio", "elements", "blake3 (raw)"
+        ));
+        for e in &d.sections {
+            line(format!(
+                "  {:<13} {:>5} {:>14} {:>14} {:>14} {:>6.2}× {:>12}  {}",
+                e.name,
+                e.codec,
+                e.offset,
+                e.stored_length,
+                e.raw_length,
+                e.raw_length as f64 / e.stored_length.max(1) as f64,
+                e.elements,
+                &e.raw_hash[..16]
+            ));
+        }
+    } else {
         line(format!(
             "  {:<13} {:>5} {:>14} {:>14} {:>12}  {}",
-            e.name,
-            e.codec,
-            e.offset,
-            e.stored_length,
-            e.elements,
-            &e.raw_hash[..16]
+            "kind", "codec", "offset", "bytes", "elements", "blake3"
         ));
+        for e in &d.sections {
+            line(format!(
+                "  {:<13} {:>5} {:>14} {:>14} {:>12}  {}",
+                e.name,
+                e.codec,
+                e.offset,
+                e.stored_length,
+                e.elements,
+                &e.raw_hash[..16]
+            ));
+        }
     }
     s.pop();
     s

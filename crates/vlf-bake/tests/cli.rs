@@ -893,6 +893,8 @@ fn every_subcommand_has_help() {
         &["render", "--help"],
         &["gen", "--help"],
         &["demo", "--help"],
+        &["pack", "--help"],
+        &["unpack", "--help"],
         &["help", "bake"],
         &["bake", "-h"],
     ] {
@@ -901,7 +903,7 @@ fn every_subcommand_has_help() {
         assert!(r.stdout.contains("--help"), "`{}`:\n{}", r.what, r.stdout);
     }
     let r = vlf(&["--help"]).ok();
-    for sub in ["bake", "dump", "trace", "rays", "render", "gen", "demo"] {
+    for sub in ["bake", "dump", "pack", "unpack", "trace", "rays", "render", "gen", "demo"] {
         assert!(r.stdout.contains(sub), "top-level help does not list `{sub}`:\n{}", r.stdout);
     }
     let v = vlf(&["--version"]).ok();
@@ -1178,4 +1180,119 @@ fn outputs_that_are_fifos_are_written_through_not_replaced() {
     assert_eq!(refused.code, 1);
     assert!(refused.stderr.contains("not a regular file"), "{}", refused.stderr);
     assert!(std::fs::metadata(&fifo).unwrap().file_type().is_fifo());
+}
+
+// ---------------------------------------------------------------------------------------------
+// 9. pack and unpack
+
+#[test]
+fn pack_and_unpack_restore_the_field_byte_for_byte_and_summarise() {
+    let dir = tempdir();
+    let field = bake_bunny(dir.path(), "bunny.vlf");
+    let packed = dir.path().join("bunny.packed.vlf");
+    let j = vlf(&["pack", s(&field), "-o", s(&packed), "--json"]).ok().json();
+    for key in ["raw_bytes", "packed_bytes", "ratio", "seconds", "mb_per_s", "level", "sections"] {
+        assert!(j.get(key).is_some(), "pack --json lacks `{key}`: {j}");
+    }
+    assert!(is_hex_hash(&j["content_hash"]) && is_hex_hash(&j["raw_content_hash"]), "{j}");
+    assert_eq!(j["level"], 3);
+    assert_eq!(j["packed_bytes"].as_u64().unwrap(), std::fs::metadata(&packed).unwrap().len());
+    assert_eq!(j["raw_bytes"].as_u64().unwrap(), std::fs::metadata(&field).unwrap().len());
+    assert!(j["ratio"].as_f64().unwrap() > 1.5, "{j}");
+    assert_eq!(j["raw_content_hash"], hex(&Field::open(&field).unwrap().content_hash()));
+    assert_eq!(j["sections"].as_array().unwrap().len(), 15);
+
+    let back = dir.path().join("back.vlf");
+    let u = vlf(&["unpack", s(&packed), "-o", s(&back), "--json"]).ok().json();
+    assert_eq!(u["content_hash"], j["raw_content_hash"]);
+    assert!(std::fs::read(&back).unwrap() == std::fs::read(&field).unwrap(), "unpack did not restore the field");
+
+    let r = vlf(&["pack", s(&field), "-o", s(&packed), "--quiet"]).ok();
+    assert_eq!((r.stdout.as_str(), r.stderr.as_str()), ("", ""));
+    let r = vlf(&["unpack", s(&packed), "-o", s(&back), "-q"]).ok();
+    assert_eq!((r.stdout.as_str(), r.stderr.as_str()), ("", ""));
+    let r = vlf(&["pack", s(&field), "-o", s(&packed), "--level", "9"]).ok();
+    assert!(r.stdout.contains("at zstd level 9") && r.stdout.contains("unpacks to"), "{}", r.stdout);
+    assert_no_temp_files(dir.path());
+}
+
+#[test]
+fn a_packed_field_dumps_verifies_and_traces_like_the_raw_one() {
+    let (dir, field, rays) = bunny_and_rays();
+    let packed = dir.path().join("bunny.packed.vlf");
+    vlf(&["pack", s(&field), "-o", s(&packed), "-q"]).ok();
+    let raw_info = dump_json(&field);
+    let info = dump_json(&packed);
+    assert_eq!(info["file_bytes"].as_u64().unwrap(), std::fs::metadata(&packed).unwrap().len());
+    assert_eq!(info["packed"]["unpacked_bytes"], raw_info["file_bytes"]);
+    assert_eq!(info["packed"]["unpacked_content_hash"], raw_info["content_hash"]);
+    assert_ne!(info["content_hash"], raw_info["content_hash"]);
+    assert_eq!(info["statistics"], raw_info["statistics"]);
+    let tiles = info["sections"].as_array().unwrap().iter().find(|e| e["name"] == "TILES").unwrap();
+    assert_eq!(tiles["codec"], "zstd");
+    assert!(tiles["stored_length"].as_u64() < tiles["raw_length"].as_u64(), "{tiles}");
+    assert!(raw_info.get("packed").is_none(), "a raw field's dump has no `packed` key");
+
+    let text = vlf(&["dump", s(&packed)]).ok().stdout;
+    assert!(text.contains("packed        zstd") && text.contains("unpacks to"), "{text}");
+    assert!(text.contains(&format!("content hash {}", raw_info["content_hash"].as_str().unwrap())), "{text}");
+    let verified = vlf(&["dump", s(&packed), "--verify"]).ok().stdout;
+    assert!(verified.contains("verify: OK"), "{verified}");
+
+    let (raw_hits, packed_hits) = (dir.path().join("raw.hits"), dir.path().join("packed.hits"));
+    vlf(&["trace", s(&field), "--rays", s(&rays), "--out", s(&raw_hits)]).ok();
+    vlf(&["trace", s(&packed), "--rays", s(&rays), "--out", s(&packed_hits)]).ok();
+    assert!(std::fs::read(&raw_hits).unwrap() == std::fs::read(&packed_hits).unwrap());
+}
+
+#[test]
+fn a_damaged_packed_field_is_refused_by_dump_verify_and_unpack_naming_the_fault() {
+    let dir = tempdir();
+    let field = bake_bunny(dir.path(), "bunny.vlf");
+    let packed = dir.path().join("bunny.packed.vlf");
+    vlf(&["pack", s(&field), "-o", s(&packed), "-q"]).ok();
+    let good = std::fs::read(&packed).unwrap();
+    let (offset, len) = section_span(&packed, "TILES");
+    let (strings_offset, strings_len) = section_span(&packed, "STRINGS");
+
+    let mut payload = good.clone();
+    payload[(offset + len / 2) as usize] ^= 0x20;
+    let mut padding = good.clone();
+    padding[(strings_offset + strings_len) as usize] = 1; // STRINGS is raw and short: padding follows
+    let out = dir.path().join("out.vlf");
+    for (damaged, says, open_catches) in [(payload, "TILES", true), (padding, "padding", false)] {
+        let bad = dir.path().join("bad.vlf");
+        std::fs::write(&bad, &damaged).unwrap();
+        let dump = vlf(&["dump", s(&bad)]);
+        if open_catches {
+            assert!(dump.one_error_line().contains(says), "{}", dump.stderr);
+        } else {
+            dump.ok();
+        }
+        for args in [vec!["dump", s(&bad), "--verify"], vec!["unpack", s(&bad), "-o", s(&out)]] {
+            let r = vlf(&args);
+            let line = r.one_error_line();
+            assert!(line.contains(says) && line.contains("bad.vlf"), "{line}");
+        }
+        assert!(!out.exists(), "a failed unpack wrote its output");
+    }
+    assert_no_temp_files(dir.path());
+}
+
+#[test]
+fn pack_refuses_bad_levels_packed_inputs_and_unpack_raw_ones() {
+    let dir = tempdir();
+    let field = bake_bunny(dir.path(), "bunny.vlf");
+    let packed = dir.path().join("bunny.packed.vlf");
+    for level in ["--level=0", "--level=20", "--level=-1", "--level=x"] {
+        let r = vlf(&["pack", s(&field), "-o", s(&packed), level]).fails_with(2);
+        assert!(r.stderr.contains("--level"), "{}", r.stderr);
+    }
+    vlf(&["pack", s(&field), "-o", s(&packed), "-q"]).ok();
+    let again = dir.path().join("again.vlf");
+    let r = vlf(&["pack", s(&packed), "-o", s(&again)]);
+    assert!(r.one_error_line().contains("already packed"), "{}", r.stderr);
+    let r = vlf(&["unpack", s(&field), "-o", s(&again)]);
+    assert!(r.one_error_line().contains("not packed"), "{}", r.stderr);
+    assert!(!again.exists());
 }

@@ -29,7 +29,7 @@ pub enum FormatError {
     #[error("section {kind} appears twice (table entries {first} and {second})")]
     DuplicateSection { kind: String, first: usize, second: usize },
     #[error(
-        "section {kind} is stored with codec {codec} (zstd); unpack the field first (`vlf-bake pack --unpack`) or open it with a reader that decompresses"
+        "section {kind} is stored with codec {codec} (zstd): this is a packed field; decode it with vlf-runtime's `packed` feature (on by default) or unpack it first with `vlf-bake unpack`"
     )]
     CompressedSection { kind: &'static str, codec: u32 },
     #[error("section {kind} has {actual} elements, expected {expected}")]
@@ -44,6 +44,12 @@ pub enum FormatError {
     SectionHashMismatch { kind: String, stored: String, computed: String },
     #[error("padding byte at offset {offset} is {value:#04x}, must be zero")]
     NonZeroPadding { offset: u64, value: u8 },
+    #[error("section {kind} does not decode: {problem}")]
+    Decode { kind: String, problem: String },
+    #[error("the field unpacks to {bytes} bytes, more than the limit of {limit} bytes set for decoding it in memory")]
+    UnpackedTooLarge { bytes: u64, limit: u64 },
+    #[error("cannot allocate {bytes} bytes to hold the field in memory")]
+    OutOfMemory { bytes: u64 },
 }
 
 /// Lower-case hex of a hash, for messages and `dump`.

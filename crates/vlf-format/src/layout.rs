@@ -21,6 +21,11 @@ pub const SECTION_ALIGN: u64 = 64;
 pub const MAX_SECTIONS: u32 = 4096;
 /// Byte range of the `content_hash` field inside the header, taken as zero when hashing.
 pub const CONTENT_HASH_RANGE: std::ops::Range<usize> = 48..80;
+/// The most a zstd frame can expand: every block yields at most 128 KiB and takes at least 4
+/// bytes (a 3-byte block header and one byte of content), so `raw_length` of a zstd section is at
+/// most this many times its `stored_length` (`formats/vlf.md` §8). Readers refuse a table entry
+/// that claims more, before allocating anything for it.
+pub const MAX_ZSTD_EXPANSION: u64 = 32768;
 /// The largest BSP depth a file may record.
 pub const MAX_DEPTH: u32 = 24;
 /// Quantisation levels of a tile's z range: `z(q) = -R + q * (2R / Z_LEVELS)`.

@@ -6,23 +6,28 @@
 //!   independent of the file size and hands out typed slices;
 //! - [`writer`]: a writer that places sections in a file in place, each byte written once, with
 //!   big sections streamed or filled while others are written;
-//! - [`verify`]: the full verification behind `vlf-bake dump --verify`;
-//! - [`shard`]: the shard files of sharded bakes (`formats/vlf-shard.md`).
+//! - [`mod@verify`]: the full verification behind `vlf-bake dump --verify`;
+//! - [`shard`]: the shard files of sharded bakes (`formats/vlf-shard.md`);
+//! - [`pack`]: packed fields (zstd sections, §8): layouts, and with the `zstd` feature encoding and
+//!   decoding with every length and hash checked.
 //!
 //! Errors are values ([`FormatError`]), never panics, whatever the input bytes.
 
 #[cfg(target_endian = "big")]
 compile_error!("vlf-format supports little-endian targets only: the file format is little-endian and is cast in place");
 
+pub mod aligned;
 pub mod error;
 pub mod layout;
+pub mod pack;
 pub mod reader;
 pub mod shard;
 pub mod verify;
 pub mod writer;
 
+pub use aligned::AlignedBytes;
 pub use error::{FormatError, hex};
 pub use layout::*;
-pub use reader::{FieldReader, check_header, check_table, content_hash, read_header_and_table};
+pub use reader::{FieldReader, check_header, check_table, content_hash, parse_head, read_header_and_table};
 pub use verify::{VerifyReport, verify};
 pub use writer::{FieldFile, HashingWriter, SectionWriter};

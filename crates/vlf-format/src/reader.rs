@@ -52,6 +52,21 @@ pub fn read_header_and_table(bytes: &[u8]) -> Result<(&Header, &[SectionEntry]),
     Ok((header, table))
 }
 
+/// The checks of [`read_header_and_table`] on the first bytes of a file of `file_length` bytes
+/// (`head` must hold the header and the whole table, or the whole file if it is shorter), returning
+/// copies: for tools that stream a file rather than map it. Time independent of the file size.
+pub fn parse_head(head: &[u8], file_length: u64) -> Result<(Header, Vec<SectionEntry>), FormatError> {
+    let header = check_header(head, file_length, &MAGIC)?;
+    let table_end = HEADER_SIZE + header.section_count as usize * TABLE_ENTRY_SIZE;
+    let head_and_table = head.get(..table_end).ok_or(FormatError::TableOutOfBounds {
+        count: header.section_count,
+        end: table_end as u64,
+        file_length: head.len() as u64,
+    })?;
+    let table = check_table(head_and_table, file_length)?;
+    Ok((header, table))
+}
+
 /// The header checks of §7, in its order, for a container whose magic is `magic` (a field's
 /// [`MAGIC`], or another file type built on the same container, such as a shard): `head` holds at
 /// least the first 128 bytes of a file of `file_length` bytes. On success the section table lies
@@ -139,6 +154,12 @@ pub fn check_table(head_and_table: &[u8], file_length: u64) -> Result<Vec<Sectio
         if e.codec == codec::RAW && e.raw_length != e.stored_length {
             return Err(bad(format!(
                 "raw section has raw_length {} but stored_length {}",
+                e.raw_length, e.stored_length
+            )));
+        }
+        if e.codec == codec::ZSTD && e.raw_length as u128 > e.stored_length as u128 * MAX_ZSTD_EXPANSION as u128 {
+            return Err(bad(format!(
+                "raw_length {} cannot come from {} stored bytes: a zstd frame expands at most {MAX_ZSTD_EXPANSION}-fold",
                 e.raw_length, e.stored_length
             )));
         }

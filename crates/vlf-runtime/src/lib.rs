@@ -23,6 +23,13 @@
 //! [`Material`] (through its provenance), and the [`SceneCamera`]s and [`SceneLight`]s of a glTF
 //! input. A field without them (every 1.0 field) returns `None` and empty iterators, and the
 //! renderer supplies its own defaults.
+//!
+//! **Packed fields** (`vlf-bake pack`, `formats/vlf.md` §8) open through the same calls, but not
+//! instantly: their zstd sections are decoded into one owned, 64-byte-aligned buffer laid out as
+//! the raw field, which costs time and memory linear in the field's size (see
+//! [`Field::is_packed`], [`OpenOptions::max_unpacked_bytes`]). Raw fields stay zero-copy. Decoding
+//! needs the `packed` cargo feature (on by default; it links the zstd C library); without it a
+//! packed field is refused with an error that says so.
 
 mod query;
 mod scene;
@@ -30,9 +37,12 @@ mod scene;
 use std::fs::File;
 use std::io::Read;
 use std::path::{Path, PathBuf};
+use vlf_format::AlignedBytes;
+use vlf_format::pack::Unpacked;
 
 pub use query::FieldView;
 pub use scene::{CameraProjection, LightKind, Material, SceneCamera, SceneLight};
+pub use vlf_format::pack::PackedLayout;
 pub use vlf_format::{FieldReader, FormatError, hex};
 pub use vlf_geom::{Counter, Hit, Intersector, Ray, TraceStats};
 
@@ -58,22 +68,17 @@ impl From<FormatError> for OpenError {
 enum Backing {
     /// A read-only memory map of the file.
     Map(memmap2::Mmap),
-    /// An owned copy, 8-byte aligned so sections can be cast in place.
-    Owned { words: Vec<u64>, len: usize },
+    /// An owned buffer, 64-byte aligned so sections can be cast in place: a copy of raw bytes, or
+    /// a packed field decoded.
+    Owned(AlignedBytes),
 }
 
 impl Backing {
     fn bytes(&self) -> &[u8] {
         match self {
             Backing::Map(m) => m,
-            Backing::Owned { words, len } => &bytemuck::cast_slice(words)[..*len],
+            Backing::Owned(b) => b.as_bytes(),
         }
-    }
-
-    fn copy_of(bytes: &[u8]) -> Backing {
-        let mut words = vec![0u64; bytes.len().div_ceil(8)];
-        bytemuck::cast_slice_mut::<u64, u8>(&mut words)[..bytes.len()].copy_from_slice(bytes);
-        Backing::Owned { words, len: bytes.len() }
     }
 }
 
@@ -88,6 +93,24 @@ self_cell::self_cell!(
 /// An open visibility field.
 pub struct Field {
     cell: FieldCell,
+    /// How a packed field was stored; `None` for a raw one.
+    packed: Option<Box<PackedLayout>>,
+}
+
+/// How to open a field. [`Field::open`], [`Field::read`] and [`Field::from_bytes`] use the
+/// defaults.
+///
+/// ```no_run
+/// use vlf_runtime::OpenOptions;
+///
+/// // Refuse packed fields that would take more than 1 GiB of memory once decoded.
+/// let field = OpenOptions::new().max_unpacked_bytes(1 << 30).open("scene.vlf")?;
+/// # Ok::<(), vlf_runtime::OpenError>(())
+/// ```
+#[derive(Clone, Debug, Default)]
+pub struct OpenOptions {
+    #[cfg_attr(not(feature = "packed"), allow(dead_code))]
+    max_unpacked_bytes: Option<u64>,
 }
 
 /// Where a triangle came from (the field's PROVENANCE, SOURCES and INPUTS sections).
@@ -111,9 +134,28 @@ pub struct Provenance<'a> {
     pub index: u32,
 }
 
-impl Field {
+impl OpenOptions {
+    /// The defaults: no limit on a packed field's decoded size other than the format's own bound.
+    pub fn new() -> OpenOptions {
+        OpenOptions::default()
+    }
+
+    /// Refuse a packed field whose decoded size (which its section table states, before anything
+    /// is allocated) exceeds `bytes`, with [`FormatError::UnpackedTooLarge`]. Without a limit the
+    /// decoded size is bounded by what the file's zstd frames can expand to
+    /// ([`vlf_format::MAX_ZSTD_EXPANSION`] times their size), and an allocation that fails is
+    /// [`FormatError::OutOfMemory`], not an abort. Raw fields are not affected.
+    pub fn max_unpacked_bytes(&mut self, bytes: u64) -> &mut OpenOptions {
+        self.max_unpacked_bytes = Some(bytes);
+        self
+    }
+
     /// Opens a field by memory-mapping it. Checks the header and section table (time independent
     /// of the file size); reads nothing else until queried.
+    ///
+    /// A packed field (`formats/vlf.md` §8) cannot be used in place: it is decoded into memory
+    /// here, every section's length and hash checked, in time and memory linear in the field's
+    /// size. See [`Field::is_packed`].
     ///
     /// # The mapping contract
     /// The file must not be modified in place or truncated while the field is open: the mapping
@@ -122,7 +164,7 @@ impl Field {
     /// program modify the file in place anyway, every read from the mapping is bounds-checked, so
     /// the queries give wrong answers but never read outside the mapping; a truncation makes the
     /// operating system raise `SIGBUS` on access. If you cannot rule that out, use [`Field::read`].
-    pub fn open(path: impl AsRef<Path>) -> Result<Field, OpenError> {
+    pub fn open(&self, path: impl AsRef<Path>) -> Result<Field, OpenError> {
         let path = path.as_ref();
         let io = |error| OpenError::Io { path: path.to_owned(), error };
         let file = File::open(path).map_err(io)?;
@@ -131,34 +173,103 @@ impl Field {
             // Too short to map usefully; let the reader name the problem.
             let mut bytes = Vec::new();
             file.take(len).read_to_end(&mut bytes).map_err(io)?;
-            return Self::from_backing(Backing::copy_of(&bytes)).map_err(|e| e.with_path(path));
+            return self.from_bytes(&bytes).map_err(|e| e.with_path(path));
         }
         // SAFETY: `Mmap::map` is unsafe because the mapped file could change underneath us. This
         // is the mapping contract documented above: our tools never modify a field in place, and
         // every read through the mapping is bounds-checked, so a concurrent modification by a
         // third party yields wrong answers rather than out-of-bounds reads. The mapping is
-        // read-only and lives as long as the `Field` (it is the self_cell owner).
+        // read-only and lives as long as the `Field` (it is the self_cell owner), or, for a
+        // packed field, until it is decoded.
         let map = unsafe { memmap2::Mmap::map(&file) }.map_err(io)?;
-        Self::from_backing(Backing::Map(map)).map_err(|e| e.with_path(path))
+        let field = match self.unpack_if_packed(&map) {
+            Ok(Some(unpacked)) => Field::from_unpacked(unpacked),
+            Ok(None) => Field::from_backing(Backing::Map(map), None),
+            Err(e) => Err(e.into()),
+        };
+        field.map_err(|e| e.with_path(path))
     }
 
     /// Opens a field by reading the whole file into memory (no mapping contract; time linear in
     /// the file size).
-    pub fn read(path: impl AsRef<Path>) -> Result<Field, OpenError> {
+    pub fn read(&self, path: impl AsRef<Path>) -> Result<Field, OpenError> {
         let path = path.as_ref();
         let bytes = std::fs::read(path).map_err(|error| OpenError::Io { path: path.to_owned(), error })?;
-        Self::from_backing(Backing::copy_of(&bytes)).map_err(|e| e.with_path(path))
+        self.from_bytes(&bytes).map_err(|e| e.with_path(path))
     }
 
-    /// Opens a field from bytes already in memory. The bytes are copied once into an aligned
-    /// buffer; to query borrowed, aligned bytes without a copy use [`FieldView::from_bytes`].
+    /// Opens a field from bytes already in memory. Raw bytes are copied once into an aligned
+    /// buffer (to query borrowed, aligned bytes without a copy use [`FieldView::from_bytes`]); a
+    /// packed field is decoded from them.
+    pub fn from_bytes(&self, bytes: &[u8]) -> Result<Field, OpenError> {
+        match self.unpack_if_packed(bytes)? {
+            Some(unpacked) => Field::from_unpacked(unpacked),
+            None => Field::from_backing(Backing::Owned(AlignedBytes::copy_of(bytes)?), None),
+        }
+    }
+
+    /// The decoded field if `bytes` are a packed field; `None` for a raw field, and for bytes
+    /// whose fault the reader will name.
+    #[cfg(feature = "packed")]
+    fn unpack_if_packed(&self, bytes: &[u8]) -> Result<Option<Unpacked>, FormatError> {
+        match vlf_format::parse_head(bytes, bytes.len() as u64) {
+            Ok((_, table)) if vlf_format::pack::is_packed(&table) => {
+                vlf_format::pack::unpack_in_memory(bytes, self.max_unpacked_bytes).map(Some)
+            }
+            _ => Ok(None),
+        }
+    }
+
+    /// Without the `packed` feature nothing is decoded: the reader refuses a compressed section
+    /// with [`FormatError::CompressedSection`], whose message names the feature.
+    #[cfg(not(feature = "packed"))]
+    fn unpack_if_packed(&self, _bytes: &[u8]) -> Result<Option<Unpacked>, FormatError> {
+        Ok(None)
+    }
+}
+
+impl Field {
+    /// Opens a field by memory-mapping it: [`OpenOptions::open`] with the default options, whose
+    /// documentation states the mapping contract. Checks the header and section table (time
+    /// independent of the file size); reads nothing else until queried. A packed field is decoded
+    /// into memory instead (not instant; see [`Field::is_packed`]).
+    pub fn open(path: impl AsRef<Path>) -> Result<Field, OpenError> {
+        OpenOptions::new().open(path)
+    }
+
+    /// Opens a field by reading the whole file into memory (no mapping contract; time linear in
+    /// the file size): [`OpenOptions::read`] with the default options.
+    pub fn read(path: impl AsRef<Path>) -> Result<Field, OpenError> {
+        OpenOptions::new().read(path)
+    }
+
+    /// Opens a field from bytes already in memory: [`OpenOptions::from_bytes`] with the default
+    /// options. The bytes are copied once into an aligned buffer (a packed field is decoded from
+    /// them); to query borrowed, aligned bytes without a copy use [`FieldView::from_bytes`].
     pub fn from_bytes(bytes: &[u8]) -> Result<Field, OpenError> {
-        Self::from_backing(Backing::copy_of(bytes))
+        OpenOptions::new().from_bytes(bytes)
     }
 
-    fn from_backing(backing: Backing) -> Result<Field, OpenError> {
+    fn from_backing(backing: Backing, packed: Option<Box<PackedLayout>>) -> Result<Field, OpenError> {
         let cell = FieldCell::try_new(backing, |b| FieldReader::new(b.bytes()).map(FieldView::new))?;
-        Ok(Field { cell })
+        Ok(Field { cell, packed })
+    }
+
+    fn from_unpacked(unpacked: Unpacked) -> Result<Field, OpenError> {
+        Field::from_backing(Backing::Owned(unpacked.bytes), Some(Box::new(unpacked.packed)))
+    }
+
+    /// Whether the field was stored packed (zstd sections, `formats/vlf.md` §8) and was decoded
+    /// into memory when opened. Its bytes, [`Field::content_hash`] and answers are those of the
+    /// raw field `vlf-bake unpack` would write; opening it took time and memory linear in its size.
+    pub fn is_packed(&self) -> bool {
+        self.packed.is_some()
+    }
+
+    /// How a packed field was stored: its header and section table as in the file (codecs,
+    /// stored lengths, the packed file's own content hash). `None` for a raw field.
+    pub fn packed_layout(&self) -> Option<&PackedLayout> {
+        self.packed.as_deref()
     }
 
     /// The query engine over the field's bytes.
@@ -250,7 +361,9 @@ impl Field {
         Some([t.vertex(0), t.vertex(1), t.vertex(2)])
     }
 
-    /// The content hash (`formats/vlf.md` §3.1), which identifies these exact bytes.
+    /// The content hash (`formats/vlf.md` §3.1), which identifies these exact bytes. For a packed
+    /// field, that of the raw field it decodes to; the packed file's own is in
+    /// [`Field::packed_layout`].
     pub fn content_hash(&self) -> [u8; 32] {
         self.reader().header.content_hash
     }
@@ -277,7 +390,7 @@ impl Field {
         (self.reader().scene.center, self.reader().scene.radius)
     }
 
-    /// The size of the field in bytes.
+    /// The size of the field in bytes (for a packed field, decoded).
     pub fn len_bytes(&self) -> u64 {
         self.reader().bytes.len() as u64
     }
