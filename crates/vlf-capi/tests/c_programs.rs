@@ -244,3 +244,29 @@ fn c_api_checks_pass() {
     println!("{stdout}{}", text(&out.stderr));
     assert!(stdout.contains(" passed, 0 failed"), "{stdout}");
 }
+
+/// The header also serves C++ (`extern "C"`, the `VlfStatus` enum with a fixed underlying type):
+/// a translation unit that includes it and calls the API compiles cleanly as C++11 and C++17.
+#[test]
+fn header_compiles_as_cpp() {
+    let work = tempfile::tempdir_in(env!("CARGO_TARGET_TMPDIR")).expect("temp dir");
+    let source = work.path().join("use_header.cpp");
+    std::fs::write(
+        &source,
+        "#include \"vlf.h\"\n\
+         static_assert(sizeof(VlfRay) == 32 && sizeof(VlfHit) == 16, \"rays.md records\");\n\
+         int trace(const VlfField *field, const VlfRay *ray, VlfHit *hit) {\n\
+         \x20   VlfStatus status = vlf_closest_hit(field, ray, hit);\n\
+         \x20   return status == VLF_OK ? 0 : static_cast<int>(status);\n\
+         }\n",
+    )
+    .expect("write C++ source");
+    let cxx = std::env::var("CXX").ok().filter(|c| !c.is_empty()).unwrap_or_else(|| "c++".to_owned());
+    for std in ["c++11", "c++17"] {
+        let mut cmd = Command::new(&cxx);
+        cmd.arg(format!("-std={std}")).args(STRICT).arg("-fsyntax-only").arg("-I").arg(crate_dir().join("include"));
+        let out =
+            cmd.arg(&source).output().unwrap_or_else(|e| panic!("cannot run the C++ compiler `{cxx}` (set CXX): {e}"));
+        assert!(out.status.success(), "{cmd:?} failed:\n{}", text(&out.stderr));
+    }
+}
