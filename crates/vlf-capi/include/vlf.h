@@ -72,6 +72,11 @@ enum VlfStatus
    * A bug in this library (a caught Rust panic). Please report it with the message.
    */
   VLF_ERR_INTERNAL = 5,
+  /**
+   * Memory for the field could not be allocated (opening from memory, or decoding a packed
+   * field).
+   */
+  VLF_ERR_OUT_OF_MEMORY = 6,
 };
 #ifndef __cplusplus
 #if __STDC_VERSION__ >= 202311L
@@ -217,7 +222,9 @@ const char *vlf_last_error_message(void);
  * memory-mapping it, and stores the new handle in `*out`.
  *
  * Checks the header, the section table and the content hash, and reads nothing else: the time
- * does not depend on the file's size. Queries then read the mapped bytes on demand.
+ * does not depend on the file's size. Queries then read the mapped bytes on demand. A packed
+ * field (`vlf-bake pack`) is the exception: it is decoded into memory here, in time and memory
+ * linear in its size.
  *
  * The file must not be modified in place or truncated while the field is open (files written by
  * `vlf-bake` are replaced by renaming, which is safe). In-place changes give wrong answers; a
@@ -225,7 +232,9 @@ const char *vlf_last_error_message(void);
  * ruled out.
  *
  * Returns `VLF_OK`; `VLF_ERR_IO` if the file cannot be opened or mapped; `VLF_ERR_FORMAT` if it
- * is not a valid field; `VLF_ERR_NULL_ARGUMENT`. `*out` is set to NULL on failure.
+ * is not a valid field (or a packed field that does not decode); `VLF_ERR_OUT_OF_MEMORY` if a
+ * packed field's decoded bytes cannot be allocated; `VLF_ERR_NULL_ARGUMENT`. `*out` is set to
+ * NULL on failure.
  *
  * # Safety
  * `path` must be NULL or a NUL-terminated string; `out` must be NULL or valid for writing a
@@ -236,13 +245,14 @@ VlfStatus vlf_open_path(const char *path, struct VlfField **out);
 /**
  * Opens a field from `len` bytes at `data` and stores the new handle in `*out`.
  *
- * The bytes are **copied** once into a buffer the field owns (aligned as the sections need), so
- * `data` may be freed or reused as soon as this returns, and nothing can change the field's
- * bytes afterwards. Time and memory are linear in `len`; for large files prefer
- * `vlf_open_path`, which maps the file instead.
+ * The bytes are **copied** once into a buffer the field owns (aligned as the sections need; a
+ * packed field is decoded into it), so `data` may be freed or reused as soon as this returns,
+ * and nothing can change the field's bytes afterwards. Time and memory are linear in `len`; for
+ * large files prefer `vlf_open_path`, which maps the file instead.
  *
  * Returns `VLF_OK`; `VLF_ERR_FORMAT` if the bytes are not a valid field;
- * `VLF_ERR_NULL_ARGUMENT` if `data` or `out` is NULL. `*out` is set to NULL on failure.
+ * `VLF_ERR_OUT_OF_MEMORY` if the copy cannot be allocated; `VLF_ERR_NULL_ARGUMENT` if `data` or
+ * `out` is NULL. `*out` is set to NULL on failure.
  *
  * # Safety
  * `data` must be NULL or point to `len` readable bytes; `out` must be NULL or valid for writing

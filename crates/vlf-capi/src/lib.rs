@@ -50,7 +50,7 @@ use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::Path;
 
 use bytemuck::{Pod, Zeroable};
-use vlf_runtime::{Field, Hit, OpenError, Ray};
+use vlf_runtime::{Field, FormatError, Hit, OpenError, Ray};
 
 /// What a call did: `VLF_OK` (0) on success, otherwise why it failed. The values are stable.
 #[allow(non_camel_case_types)]
@@ -70,6 +70,9 @@ pub enum VlfStatus {
     VLF_ERR_FORMAT = 4,
     /// A bug in this library (a caught Rust panic). Please report it with the message.
     VLF_ERR_INTERNAL = 5,
+    /// Memory for the field could not be allocated (opening from memory, or decoding a packed
+    /// field).
+    VLF_ERR_OUT_OF_MEMORY = 6,
 }
 
 use VlfStatus::*;
@@ -191,6 +194,8 @@ impl From<OpenError> for Failure {
     fn from(e: OpenError) -> Failure {
         let status = match e {
             OpenError::Io { .. } => VLF_ERR_IO,
+            OpenError::Format { error: FormatError::OutOfMemory { .. }, .. }
+            | OpenError::Bytes(FormatError::OutOfMemory { .. }) => VLF_ERR_OUT_OF_MEMORY,
             _ => VLF_ERR_FORMAT,
         };
         Failure { status, message: e.to_string() }
@@ -364,6 +369,7 @@ pub extern "C" fn vlf_status_name(status: i32) -> *const c_char {
         3 => c"VLF_ERR_IO",
         4 => c"VLF_ERR_FORMAT",
         5 => c"VLF_ERR_INTERNAL",
+        6 => c"VLF_ERR_OUT_OF_MEMORY",
         _ => c"unknown status",
     };
     name.as_ptr()
@@ -387,7 +393,9 @@ pub extern "C" fn vlf_last_error_message() -> *const c_char {
 /// memory-mapping it, and stores the new handle in `*out`.
 ///
 /// Checks the header, the section table and the content hash, and reads nothing else: the time
-/// does not depend on the file's size. Queries then read the mapped bytes on demand.
+/// does not depend on the file's size. Queries then read the mapped bytes on demand. A packed
+/// field (`vlf-bake pack`) is the exception: it is decoded into memory here, in time and memory
+/// linear in its size.
 ///
 /// The file must not be modified in place or truncated while the field is open (files written by
 /// `vlf-bake` are replaced by renaming, which is safe). In-place changes give wrong answers; a
@@ -395,7 +403,9 @@ pub extern "C" fn vlf_last_error_message() -> *const c_char {
 /// ruled out.
 ///
 /// Returns `VLF_OK`; `VLF_ERR_IO` if the file cannot be opened or mapped; `VLF_ERR_FORMAT` if it
-/// is not a valid field; `VLF_ERR_NULL_ARGUMENT`. `*out` is set to NULL on failure.
+/// is not a valid field (or a packed field that does not decode); `VLF_ERR_OUT_OF_MEMORY` if a
+/// packed field's decoded bytes cannot be allocated; `VLF_ERR_NULL_ARGUMENT`. `*out` is set to
+/// NULL on failure.
 ///
 /// # Safety
 /// `path` must be NULL or a NUL-terminated string; `out` must be NULL or valid for writing a
@@ -432,13 +442,14 @@ fn path_of(bytes: &[u8]) -> Result<&Path, Failure> {
 
 /// Opens a field from `len` bytes at `data` and stores the new handle in `*out`.
 ///
-/// The bytes are **copied** once into a buffer the field owns (aligned as the sections need), so
-/// `data` may be freed or reused as soon as this returns, and nothing can change the field's
-/// bytes afterwards. Time and memory are linear in `len`; for large files prefer
-/// `vlf_open_path`, which maps the file instead.
+/// The bytes are **copied** once into a buffer the field owns (aligned as the sections need; a
+/// packed field is decoded into it), so `data` may be freed or reused as soon as this returns,
+/// and nothing can change the field's bytes afterwards. Time and memory are linear in `len`; for
+/// large files prefer `vlf_open_path`, which maps the file instead.
 ///
 /// Returns `VLF_OK`; `VLF_ERR_FORMAT` if the bytes are not a valid field;
-/// `VLF_ERR_NULL_ARGUMENT` if `data` or `out` is NULL. `*out` is set to NULL on failure.
+/// `VLF_ERR_OUT_OF_MEMORY` if the copy cannot be allocated; `VLF_ERR_NULL_ARGUMENT` if `data` or
+/// `out` is NULL. `*out` is set to NULL on failure.
 ///
 /// # Safety
 /// `data` must be NULL or point to `len` readable bytes; `out` must be NULL or valid for writing
@@ -750,8 +761,15 @@ mod tests {
 
     #[test]
     fn status_names_match_the_enum() {
-        for s in [VLF_OK, VLF_ERR_NULL_ARGUMENT, VLF_ERR_INVALID_ARGUMENT, VLF_ERR_IO, VLF_ERR_FORMAT, VLF_ERR_INTERNAL]
-        {
+        for s in [
+            VLF_OK,
+            VLF_ERR_NULL_ARGUMENT,
+            VLF_ERR_INVALID_ARGUMENT,
+            VLF_ERR_IO,
+            VLF_ERR_FORMAT,
+            VLF_ERR_INTERNAL,
+            VLF_ERR_OUT_OF_MEMORY,
+        ] {
             // SAFETY: static NUL-terminated strings.
             let name = unsafe { CStr::from_ptr(vlf_status_name(s as i32)) };
             assert_eq!(name.to_str().unwrap(), format!("{s:?}"));

@@ -208,6 +208,18 @@ fn c_programs_agree_with_the_rust_api() {
         println!("{label}: {} rays, {hit_count} hits, identical to the Rust API", rays.len());
     }
 
+    // A packed field (zstd sections) opens through the same calls, decoded at open: same answers.
+    let packed = w.join("bunny.packed.vlf");
+    vlf_bake::pack::pack_path(&field_path, &packed, 3, &NoProgress).expect("pack");
+    for (label, flags) in [("static, packed, mapped", &[][..]), ("static, packed, from memory", &["--memory"][..])] {
+        let (hits_path, any_path) = (w.join("hits-packed.bin"), w.join("any-packed.bin"));
+        let out =
+            run(Command::new(&static_exe).args(flags).arg(&packed).arg(&rays_path).arg(&hits_path).arg(&any_path));
+        let (hits, any) = (std::fs::read(&hits_path).expect("hits"), std::fs::read(&any_path).expect("any"));
+        assert_same(label, &rays, &want, &want_any, &hits, &any);
+        assert!(text(&out.stdout).contains(&hash), "{label}: the packed field has the raw field's content hash");
+    }
+
     // The example's failures: a missing field is one line on standard error and exit status 1.
     let out =
         Command::new(&static_exe).arg(w.join("missing.vlf")).arg(&rays_path).arg(w.join("h.bin")).output().unwrap();

@@ -29,6 +29,7 @@ _Static_assert(offsetof(VlfHit, u) == 8 && offsetof(VlfHit, v) == 12, "VlfHit la
 _Static_assert(sizeof(VlfStatus) == 4, "VlfStatus is an int32_t");
 _Static_assert(VLF_OK == 0 && VLF_ERR_NULL_ARGUMENT == 1 && VLF_ERR_INVALID_ARGUMENT == 2, "stable codes");
 _Static_assert(VLF_ERR_IO == 3 && VLF_ERR_FORMAT == 4 && VLF_ERR_INTERNAL == 5, "stable codes");
+_Static_assert(VLF_ERR_OUT_OF_MEMORY == 6, "stable codes");
 _Static_assert(VLF_NO_PRIM == 0xFFFFFFFFu && VLF_NO_INDEX == 0xFFFFFFFFu, "miss and absent-index markers");
 
 static int passed, failed;
@@ -151,6 +152,7 @@ int main(int argc, char **argv) {
     CHECK(strcmp(vlf_version(), argv[5]) == 0);
     CHECK(strcmp(vlf_status_name(VLF_ERR_IO), "VLF_ERR_IO") == 0);
     CHECK(strcmp(vlf_status_name(VLF_OK), "VLF_OK") == 0);
+    CHECK(strcmp(vlf_status_name(VLF_ERR_OUT_OF_MEMORY), "VLF_ERR_OUT_OF_MEMORY") == 0);
     CHECK(strcmp(vlf_status_name(-1), "unknown status") == 0);
     CHECK(strcmp(vlf_last_error_message(), "") == 0);
 
