@@ -9,11 +9,14 @@
 //!   per frame for both.
 //! - [`parameters`]: frame time, field size and bake time against directions, tiles and the BSP
 //!   policy for the 100K scene.
+//! - [`first_pixel`]: time to first pixel (open a field and trace one ray, in a new process) for
+//!   fields of any size, with the file in the page cache and evicted from it.
 //!
 //! Frames are traced on one thread (the paper used one processor); every timing is the median of
 //! `repeats` runs after a warm-up run. Bakes use all cores.
 
 pub mod experiments;
+pub mod first_pixel;
 pub mod plot;
 
 use std::hint::black_box;

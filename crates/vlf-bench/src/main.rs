@@ -66,6 +66,35 @@ enum Command {
         #[arg(long, default_value_t = 100_000)]
         triangles: usize,
     },
+    /// Time to first pixel: open each field and trace one ray in a new process, `--runs` times,
+    /// with the file in the page cache (and with it evicted, with --cold). Prints a markdown
+    /// table of medians and ranges; `docs/benchmarks/first-pixel.sh` runs it on a ~1 MiB field and
+    /// on fields over 1 GiB.
+    FirstPixel {
+        /// Field files.
+        #[arg(required = true)]
+        fields: Vec<std::path::PathBuf>,
+        /// New processes per field and cache state.
+        #[arg(long, default_value_t = 21)]
+        runs: usize,
+        /// Also measure with the file evicted from the page cache before each run (Linux).
+        #[arg(long)]
+        cold: bool,
+        /// How the measured process opens the field: `open` (`Field::open`) and/or `random`
+        /// (the same with `madvise(MADV_RANDOM)` before the first read).
+        #[arg(long, value_enum, value_delimiter = ',', default_values = ["open"])]
+        access: Vec<vlf_bench::first_pixel::Access>,
+        /// Also write every run as JSON to this file.
+        #[arg(long)]
+        json: Option<std::path::PathBuf>,
+    },
+    /// The measured process of `first-pixel` (internal).
+    #[command(hide = true)]
+    FirstPixelChild {
+        field: std::path::PathBuf,
+        #[arg(long, value_enum)]
+        access: vlf_bench::first_pixel::Access,
+    },
     /// Everything, at the defaults above.
     All,
 }
@@ -98,6 +127,14 @@ fn main() -> Result<()> {
         Command::Figure3 { sizes } => println!("{}", vlf_bench::figure3(&s, &sizes)?),
         Command::Figure4 { triangles, frames } => println!("{}", vlf_bench::figure4(&s, triangles, frames)?),
         Command::Params { triangles } => println!("{}", params(&s, triangles)?),
+        Command::FirstPixel { fields, runs, cold, access, json } => {
+            let series = vlf_bench::first_pixel::measure(&fields, &access, runs, cold, s.verbose)?;
+            if let Some(path) = json {
+                std::fs::write(&path, serde_json::to_string_pretty(&series)?)?;
+            }
+            print!("{}", vlf_bench::first_pixel::table(&series));
+        }
+        Command::FirstPixelChild { field, access } => vlf_bench::first_pixel::child(&field, access)?,
         Command::All => {
             println!("{}", vlf_bench::figure3(&s, &[1_000, 4_000, 16_000, 64_000, 256_000, 1_000_000])?);
             println!("{}", vlf_bench::figure4(&s, 16_000, 120)?);

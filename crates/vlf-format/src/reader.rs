@@ -11,24 +11,44 @@ use bytemuck::Pod;
 /// size of the payload. Values *inside* the payload (offsets, ids) are not checked here: use them
 /// with bounds-checked access, or run [`crate::verify::verify`] once.
 #[derive(Clone, Copy, Debug)]
+#[deny(missing_docs)]
 pub struct FieldReader<'a> {
+    /// The whole file.
     pub bytes: &'a [u8],
+    /// The header (§3).
     pub header: &'a Header,
+    /// The section table (§4), one entry per section, sorted by offset.
     pub table: &'a [SectionEntry],
+    /// SCENE: bounding sphere, bounds and counts.
     pub scene: &'a SceneRecord,
+    /// PARAMS: lattice size, tile resolution, BSP policy, margin.
     pub params: &'a ParamsRecord,
+    /// STATISTICS: what the baker measured, for `dump`.
     pub statistics: &'a StatisticsRecord,
+    /// DIRECTIONS (§5.3): the `l` stored unit directions, `(x, y, z, 0)`.
     pub directions: &'a [[f32; 4]],
+    /// ROTATIONS (§5.4): per direction, the row-major rotation into its canonical frame.
     pub rotations: &'a [[f64; 9]],
+    /// LOOKUP (§5.3): per lattice cell, `(2N + 1)²` of them, a direction index with a flip bit,
+    /// or `LOOKUP_NONE`.
     pub lookup: &'a [u32],
+    /// BEAMS (§5.5): per direction, where its leaf bounds and triangle ids start.
     pub beams: &'a [BeamRecord],
+    /// TILES (§5.6): the `l · n²` tiles, direction by direction, row by row.
     pub tiles: &'a [TileRecord],
+    /// LEAF_BOUNDS (§5.6): per direction, `leaf_count + 1` bounds into its triangle ids.
     pub leaf_bounds: &'a [u32],
+    /// TRIANGLE_IDS (§5.6): the triangle ids of every leaf, leaf after leaf.
     pub triangle_ids: &'a [u32],
+    /// TRIANGLES (§5.7): the world-space vertices of every triangle, in id order.
     pub triangles: &'a [TriangleRecord],
+    /// PROVENANCE (§5.8): per triangle, its source and its index within it.
     pub provenance: &'a [ProvenanceRecord],
+    /// SOURCES (§5.8): the objects, groups or mesh primitives triangles came from.
     pub sources: &'a [SourceRecord],
+    /// INPUTS (§5.8): the input files.
     pub inputs: &'a [InputRecord],
+    /// STRINGS (§5.8): the UTF-8 names that SOURCES and INPUTS refer to.
     pub strings: &'a [u8],
     /// MATERIALS (§5.10); empty if the file has none (every 1.0 file).
     pub materials: &'a [MaterialRecord],

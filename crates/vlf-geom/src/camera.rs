@@ -6,6 +6,7 @@ use crate::ray::Ray;
 /// A pinhole camera. Image coordinates run from the top-left corner, x right, y down.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Camera {
+    /// The pinhole: the origin of every primary ray.
     pub eye: [f64; 3],
     forward: [f64; 3],
     right: [f64; 3],

@@ -10,10 +10,15 @@
 /// An octahedral lattice with `n` segments per octahedron edge: `2n² + 1` directions.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Lattice {
+    /// Segments per octahedron edge, `N ≥ 1`.
     pub n: u32,
 }
 
 impl Lattice {
+    /// The lattice with `n` segments per edge.
+    ///
+    /// # Panics
+    /// If `n` is 0.
     pub fn new(n: u32) -> Self {
         assert!(n >= 1, "a lattice needs at least one segment per edge");
         Lattice { n }
@@ -137,6 +142,7 @@ pub struct Candidates {
 }
 
 impl Candidates {
+    /// The candidate cells, one to three.
     pub fn as_slice(&self) -> &[(u32, u32)] {
         &self.cells[..self.len]
     }

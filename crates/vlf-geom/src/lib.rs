@@ -5,6 +5,8 @@
 //!
 //! No I/O, no allocation on query paths, no dependency on the file format.
 
+#![deny(missing_docs)]
+
 pub mod camera;
 pub mod frame;
 pub mod lattice;
@@ -19,6 +21,7 @@ pub use triangle::{TriHit, TriRay, is_degenerate};
 /// The reference intersector: every triangle, every ray, with the same watertight kernel as the
 /// accelerated paths. Slow on purpose; the baseline every fast path is tested against.
 pub struct BruteForce<'a> {
+    /// The triangles; a hit's `prim` is an index into this slice.
     pub triangles: &'a [[[f32; 3]; 3]],
 }
 

@@ -7,17 +7,24 @@ use bytemuck::{Pod, Zeroable};
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
 #[repr(C)]
 pub struct Ray {
+    /// Origin.
     pub org: [f32; 3],
+    /// Start of the interval; usually 0.
     pub tmin: f32,
+    /// Direction; any nonzero length.
     pub dir: [f32; 3],
+    /// End of the interval; `f32::INFINITY` for an unbounded ray.
     pub tmax: f32,
 }
 
 impl Ray {
+    /// The ray from `org` along `dir` on `[0, +∞]`.
     pub fn new(org: [f32; 3], dir: [f32; 3]) -> Self {
         Ray { org, tmin: 0.0, dir, tmax: f32::INFINITY }
     }
 
+    /// The ray from `org` along `dir` on `[tmin, tmax]` (a segment, or a shadow ray that stops
+    /// short of its light).
     pub fn with_interval(org: [f32; 3], dir: [f32; 3], tmin: f32, tmax: f32) -> Self {
         Ray { org, tmin, dir, tmax }
     }
@@ -43,9 +50,13 @@ impl Ray {
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
 #[repr(C)]
 pub struct Hit {
+    /// The ray parameter: the hit point is `org + t·dir` (`+inf` in [`Hit::MISS`]).
     pub t: f32,
+    /// The triangle id: an index into the field's triangles (`u32::MAX` in [`Hit::MISS`]).
     pub prim: u32,
+    /// Barycentric weight of the triangle's `v1`.
     pub u: f32,
+    /// Barycentric weight of the triangle's `v2`: the hit point is `(1 − u − v)·v0 + u·v1 + v·v2`.
     pub v: f32,
 }
 
@@ -74,13 +85,18 @@ pub trait Intersector: Sync {
 /// visited leaves counts each time).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct TraceStats {
+    /// Rays that reached the structure (invalid rays and rays that miss the scene's bounds do not).
     pub rays: u64,
+    /// Cells visited: tiles for the field, nodes for the kd-tree.
     pub cells: u64,
+    /// Leaves visited.
     pub leaves: u64,
+    /// Ray/triangle tests.
     pub triangle_tests: u64,
 }
 
 impl TraceStats {
+    /// Adds `other`'s counts to these.
     pub fn add(&mut self, other: &TraceStats) {
         self.rays += other.rays;
         self.cells += other.cells;
@@ -91,9 +107,13 @@ impl TraceStats {
 
 /// What a traversal counts. `()` counts nothing and compiles away.
 pub trait Counter {
+    /// A ray reached the structure.
     fn ray(&mut self) {}
+    /// A cell (tile or node) was visited.
     fn cell(&mut self) {}
+    /// A leaf was visited.
     fn leaf(&mut self) {}
+    /// A ray/triangle test was run.
     fn test(&mut self) {}
 }
 

@@ -29,14 +29,18 @@ pub struct TriRay {
     sx: f64,
     sy: f64,
     sz: f64,
+    /// The ray's `tmin`: hits before it are rejected.
     pub tmin: f64,
 }
 
 /// The result of one test: parameter and barycentrics of `v1` and `v2`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TriHit {
+    /// The ray parameter of the hit.
     pub t: f32,
+    /// Barycentric weight of `v1`.
     pub u: f32,
+    /// Barycentric weight of `v2`.
     pub v: f32,
 }
 

@@ -2,22 +2,44 @@
 //!
 //! A field is the data structure of Mortensen et al., *A Visibility Field for Ray Tracing*:
 //! for each of `l` directions an `n × n` grid of parallel beams, each with a 1D BSP of the
-//! triangles along it. [`Field::open`] maps the file and checks its header and section table,
-//! in time independent of the file's size; queries then read the mapped bytes directly.
+//! triangles along it. `vlf-bake` writes it (`formats/vlf.md` is the byte-level contract);
+//! [`Field::open`] maps the file and checks its header and section table in time independent of
+//! the file's size; queries then read the mapped bytes directly, so the first ray is answered
+//! as soon as the pages it touches are read.
 //!
-//! ```no_run
+//! ```
 //! use vlf_runtime::{Field, Ray};
 //!
-//! let field = Field::open("bunny.vlf")?;
-//! let ray = Ray::new([0.0, 0.1, 2.0], [0.0, 0.0, -1.0]);
-//! if let Some(hit) = field.closest_hit(&ray) {
-//!     let origin = field.provenance(hit.prim).unwrap();
-//!     println!("t = {}, triangle {} of {}", hit.t, origin.index, origin.input);
-//! }
+//! # let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/fields/tiny.vlf");
+//! // A unit box centred on the origin (fixtures/fields/tiny.vlf: 12 triangles, 10 KB).
+//! let field = Field::open(path)?; // maps the file and checks its header: O(1) in its size
+//! let ray = Ray::new([0.1, 0.2, 2.0], [0.0, 0.0, -1.0]);
+//!
+//! let hit = field.closest_hit(&ray).expect("the ray hits the box");
+//! assert_eq!(hit.t, 1.5); // the face at z = 0.5; the hit point is ray.at(t)
+//! let origin = field.provenance(hit.prim).expect("every triangle has a provenance");
+//! assert_eq!(origin.input, "Box.gltf");
+//! println!("t = {}: triangle {} of mesh {} in {}", hit.t, origin.index, origin.mesh, origin.input);
+//!
+//! assert!(field.any_hit(&ray)); // a shadow ray: stops at the first hit found
+//! assert!(!field.any_hit(&Ray::new([0.1, 0.2, 2.0], [0.0, 0.0, 1.0]))); // pointing away
 //! # Ok::<(), vlf_runtime::OpenError>(())
 //! ```
 //!
-//! `Field` is `Send + Sync`: share one across threads. Queries allocate nothing.
+//! # Guarantees
+//! - **Opening a raw field is O(1)** in the file's size: [`Field::open`] maps the file and checks
+//!   the header, the section table and the content hash over those two (`formats/vlf.md` §7).
+//!   Nothing else is read until a query touches it. (A packed field is decoded at open: below.)
+//! - **Queries never panic and never read out of bounds**, whatever the file says: a file that
+//!   passed the open checks but lies inside a section gives wrong answers for the rays that touch
+//!   the lie, and nothing worse. `vlf-bake dump --verify` checks every byte.
+//! - **The answers are exact** with respect to the watertight triangle test
+//!   ([`vlf_geom::TriRay`]): the same `t`, bit for bit, as testing every triangle.
+//! - **Queries allocate nothing** and take `&self`: [`Field`] is `Send + Sync`; share one across
+//!   threads. With the `rayon` feature, `par_closest_hits` and `par_any_hits` trace batches on
+//!   all cores.
+//! - **Invalid rays miss**: a ray with a non-finite or zero direction, a non-finite origin, a NaN
+//!   bound or `tmin > tmax` has no hit (see [`Ray::is_valid`]).
 //!
 //! A field of format 1.1 may also carry what a renderer needs besides geometry: each triangle's
 //! [`Material`] (through its provenance), and the [`SceneCamera`]s and [`SceneLight`]s of a glTF
@@ -30,6 +52,10 @@
 //! [`Field::is_packed`], [`OpenOptions::max_unpacked_bytes`]). Raw fields stay zero-copy. Decoding
 //! needs the `packed` cargo feature (on by default; it links the zstd C library); without it a
 //! packed field is refused with an error that says so.
+//!
+//! The C API over this crate is `crates/vlf-capi` (`docs/c-api.md`).
+
+#![deny(missing_docs)]
 
 mod query;
 mod scene;
@@ -50,10 +76,24 @@ pub use vlf_geom::{Counter, Hit, Intersector, Ray, TraceStats};
 /// underlying cause (so the cause is not repeated as a `source()`).
 #[derive(Debug, thiserror::Error)]
 pub enum OpenError {
+    /// The file could not be opened, measured, read or mapped.
     #[error("cannot read field {path}: {error}")]
-    Io { path: PathBuf, error: std::io::Error },
+    Io {
+        /// The path given to [`Field::open`] or [`Field::read`].
+        path: PathBuf,
+        /// What the operating system said.
+        error: std::io::Error,
+    },
+    /// The file was read, but its bytes are not a valid field (or a packed one that does not
+    /// decode).
     #[error("{path} is not a valid field: {error}")]
-    Format { path: PathBuf, error: FormatError },
+    Format {
+        /// The path given to [`Field::open`] or [`Field::read`].
+        path: PathBuf,
+        /// The first fault found (one variant per fault, naming the section or header field).
+        error: FormatError,
+    },
+    /// Bytes given to [`Field::from_bytes`] are not a valid field.
     #[error("not a valid field: {0}")]
     Bytes(FormatError),
 }
@@ -90,7 +130,10 @@ self_cell::self_cell!(
     }
 );
 
-/// An open visibility field.
+/// An open visibility field: the mapped (or owned) bytes and the query engine over them.
+///
+/// Immutable once open: every method takes `&self`, and a `Field` is `Send + Sync`, so one field
+/// serves any number of threads. Dropping it unmaps the file.
 pub struct Field {
     cell: FieldCell,
     /// How a packed field was stored; `None` for a raw one.
@@ -150,8 +193,15 @@ impl OpenOptions {
         self
     }
 
-    /// Opens a field by memory-mapping it. Checks the header and section table (time independent
-    /// of the file size); reads nothing else until queried.
+    /// Opens a field by memory-mapping it. Checks the header, the section table and the content
+    /// hash, in time independent of the file's size (no section is read or hashed: `vlf-bake dump
+    /// --verify` does that); reads nothing else until queried.
+    ///
+    /// # Errors
+    /// [`OpenError::Io`] if the file cannot be opened or mapped; [`OpenError::Format`] if its
+    /// bytes are not a valid field (bad magic, unsupported major version, a header or table fault,
+    /// a missing or misaligned section: [`FormatError`] has one variant per fault), or a packed
+    /// field that does not decode or exceeds [`OpenOptions::max_unpacked_bytes`].
     ///
     /// A packed field (`formats/vlf.md` §8) cannot be used in place: it is decoded into memory
     /// here, every section's length and hash checked, in time and memory linear in the field's
@@ -190,8 +240,11 @@ impl OpenOptions {
         field.map_err(|e| e.with_path(path))
     }
 
-    /// Opens a field by reading the whole file into memory (no mapping contract; time linear in
-    /// the file size).
+    /// Opens a field by reading the whole file into memory: no mapping contract (the file may
+    /// change or vanish afterwards), at the price of time and memory linear in the file's size.
+    ///
+    /// # Errors
+    /// As [`OpenOptions::open`].
     pub fn read(&self, path: impl AsRef<Path>) -> Result<Field, OpenError> {
         let path = path.as_ref();
         let bytes = std::fs::read(path).map_err(|error| OpenError::Io { path: path.to_owned(), error })?;
@@ -200,7 +253,10 @@ impl OpenOptions {
 
     /// Opens a field from bytes already in memory. Raw bytes are copied once into an aligned
     /// buffer (to query borrowed, aligned bytes without a copy use [`FieldView::from_bytes`]); a
-    /// packed field is decoded from them.
+    /// packed field is decoded from them. Time and memory linear in their length.
+    ///
+    /// # Errors
+    /// [`OpenError::Bytes`] if the bytes are not a valid field.
     pub fn from_bytes(&self, bytes: &[u8]) -> Result<Field, OpenError> {
         match self.unpack_if_packed(bytes)? {
             Some(unpacked) => Field::from_unpacked(unpacked),
@@ -272,31 +328,43 @@ impl Field {
         self.packed.as_deref()
     }
 
-    /// The query engine over the field's bytes.
+    /// The query engine over the field's bytes: the same queries as `Field`'s, plus the counted
+    /// variants and the candidate walk that tools and benchmarks use.
     #[inline(always)]
     pub fn view(&self) -> &FieldView<'_> {
         self.cell.borrow_dependent()
     }
 
-    /// The validated sections, for tools.
+    /// The validated sections as typed slices of the field, for tools. Values inside the sections
+    /// have not been checked (see [`FieldReader`]).
     pub fn reader(&self) -> &FieldReader<'_> {
         &self.view().reader
     }
 
-    /// The closest hit of `ray` on `[tmin, tmax]`.
+    /// The closest hit of `ray` on `[tmin, tmax]`, or `None` on a miss or an invalid ray.
+    ///
+    /// The same hit, bit for bit, as testing every triangle with the watertight kernel. Cost: a
+    /// constant-time direction lookup, then the tiles the ray crosses (at most about
+    /// `1 + √2 · n · sin α` for tile resolution `n` and angle `α` to the chosen direction), and in
+    /// each the BSP leaves its segment passes, front to back, stopping as soon as the best hit
+    /// lies within the part of the ray already searched. Allocates nothing.
     #[inline]
     pub fn closest_hit(&self, ray: &Ray) -> Option<Hit> {
         self.view().closest_hit(ray)
     }
 
-    /// Whether `ray` hits anything on `[tmin, tmax]`.
+    /// Whether `ray` hits anything on `[tmin, tmax]` (a shadow ray); `false` for an invalid ray.
+    /// The walk of [`Field::closest_hit`], stopping at the first hit found. Allocates nothing.
     #[inline]
     pub fn any_hit(&self, ray: &Ray) -> bool {
         self.view().any_hit(ray)
     }
 
-    /// Closest hits of a batch: `out[i]` is the hit record of `rays[i]` ([`Hit::MISS`] on a miss).
-    /// Panics if the slices differ in length.
+    /// Closest hits of a batch on the calling thread: `out[i]` is the hit record of `rays[i]`
+    /// ([`Hit::MISS`] on a miss).
+    ///
+    /// # Panics
+    /// If the slices differ in length.
     pub fn closest_hits(&self, rays: &[Ray], out: &mut [Hit]) {
         assert_eq!(rays.len(), out.len(), "one output per ray");
         let view = self.view();
@@ -305,7 +373,11 @@ impl Field {
         }
     }
 
-    /// Any-hit answers of a batch. Panics if the slices differ in length.
+    /// Any-hit answers of a batch on the calling thread: `out[i]` is [`Field::any_hit`] of
+    /// `rays[i]`.
+    ///
+    /// # Panics
+    /// If the slices differ in length.
     pub fn any_hits(&self, rays: &[Ray], out: &mut [bool]) {
         assert_eq!(rays.len(), out.len(), "one output per ray");
         let view = self.view();
@@ -315,7 +387,10 @@ impl Field {
     }
 
     /// [`Field::closest_hits`] on all cores (rayon's global pool, or the pool installed around
-    /// the call).
+    /// the call). Same answers, in the same order.
+    ///
+    /// # Panics
+    /// If the slices differ in length.
     #[cfg(feature = "rayon")]
     pub fn par_closest_hits(&self, rays: &[Ray], out: &mut [Hit]) {
         use rayon::prelude::*;
@@ -326,7 +401,10 @@ impl Field {
         });
     }
 
-    /// [`Field::any_hits`] on all cores.
+    /// [`Field::any_hits`] on all cores. Same answers, in the same order.
+    ///
+    /// # Panics
+    /// If the slices differ in length.
     #[cfg(feature = "rayon")]
     pub fn par_any_hits(&self, rays: &[Ray], out: &mut [bool]) {
         use rayon::prelude::*;
@@ -337,7 +415,9 @@ impl Field {
         });
     }
 
-    /// Where triangle `id` came from, or `None` if `id` is out of range (or the file lies).
+    /// Where triangle `id` came from: input file, object or mesh, index within it. `None` if
+    /// `id` is not below [`Field::triangle_count`], or if the file's provenance of that triangle
+    /// is corrupt (a reference out of bounds or a name that is not UTF-8). O(1).
     pub fn provenance(&self, id: u32) -> Option<Provenance<'_>> {
         let r = self.reader();
         let p = r.provenance.get(id as usize)?;
@@ -355,7 +435,8 @@ impl Field {
         })
     }
 
-    /// The vertices of triangle `id`.
+    /// The vertices of triangle `id` (world space, as baked), or `None` if `id` is not below
+    /// [`Field::triangle_count`]. A hit's point is `(1 − u − v)·v0 + u·v1 + v·v2`.
     pub fn triangle(&self, id: u32) -> Option<[[f32; 3]; 3]> {
         let t = self.reader().triangles.get(id as usize)?;
         Some([t.vertex(0), t.vertex(1), t.vertex(2)])
@@ -373,19 +454,23 @@ impl Field {
         self.reader().header.input_hash
     }
 
+    /// The number of triangles; triangle ids run from 0 to `triangle_count() − 1`.
     pub fn triangle_count(&self) -> u32 {
         self.reader().triangles.len() as u32
     }
 
+    /// The number of stored directions `l` (a lattice size `2N² + 1`).
     pub fn direction_count(&self) -> u32 {
         self.reader().params.direction_count
     }
 
+    /// Tiles per side `n` of each direction's `n × n` beam grid.
     pub fn tile_resolution(&self) -> u32 {
         self.reader().params.tile_resolution
     }
 
-    /// Centre and radius of the scene's bounding sphere.
+    /// Centre and radius of the scene's bounding sphere; every triangle lies inside it, and a ray
+    /// that misses it misses everything.
     pub fn bounding_sphere(&self) -> ([f64; 3], f64) {
         (self.reader().scene.center, self.reader().scene.radius)
     }
@@ -397,8 +482,14 @@ impl Field {
 }
 
 impl<'a> FieldView<'a> {
-    /// A query engine over borrowed bytes, without a copy. The bytes must be 8-byte aligned
-    /// ([`FormatError::Misaligned`] otherwise).
+    /// A query engine over borrowed bytes of a raw field, without a copy: the checks of
+    /// [`Field::open`], in time independent of the length.
+    ///
+    /// # Errors
+    /// [`FormatError::Misaligned`] if the bytes are not 8-byte aligned (a memory map or a
+    /// `Vec<u64>`-backed buffer is); [`FormatError::CompressedSection`] for a packed field (open
+    /// it with [`Field::from_bytes`], which decodes it); any other [`FormatError`] if they are not
+    /// a valid field.
     pub fn from_bytes(bytes: &'a [u8]) -> Result<FieldView<'a>, FormatError> {
         FieldReader::new(bytes).map(FieldView::new)
     }

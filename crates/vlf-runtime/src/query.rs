@@ -76,6 +76,7 @@ impl<'a> FieldView<'a> {
 
     /// The stored direction for ray direction `d` and the sign (+1 or −1) that makes the beam
     /// direction point the same way as `d`. Constant time: one division, three dot products.
+    /// `None` only if the file's lookup table lies (points at no stored direction).
     #[inline]
     pub fn select_direction(&self, d: [f64; 3]) -> Option<(usize, f64)> {
         let sigma = if d[2] < 0.0 { -1.0 } else { 1.0 };
@@ -137,13 +138,14 @@ impl<'a> FieldView<'a> {
         Some(Setup { dir, o, d: dc, t0, t1 })
     }
 
-    /// The closest hit on `[tmin, tmax]`.
+    /// The closest hit on `[tmin, tmax]`, or `None`: [`crate::Field::closest_hit`].
     #[inline]
     pub fn closest_hit(&self, ray: &Ray) -> Option<Hit> {
         self.closest_hit_counted(ray, &mut ())
     }
 
-    /// [`Self::closest_hit`], counting the work done.
+    /// [`Self::closest_hit`], counting the work done in `counter` (rays, tiles, leaves and
+    /// triangle tests; `()` counts nothing).
     pub fn closest_hit_counted(&self, ray: &Ray, counter: &mut impl Counter) -> Option<Hit> {
         let setup = self.setup(ray)?;
         counter.ray();
@@ -165,7 +167,8 @@ impl<'a> FieldView<'a> {
         best
     }
 
-    /// Whether anything is hit on `[tmin, tmax]`; the first hit found ends the search.
+    /// Whether anything is hit on `[tmin, tmax]`; the first hit found ends the search:
+    /// [`crate::Field::any_hit`].
     #[inline]
     pub fn any_hit(&self, ray: &Ray) -> bool {
         self.any_hit_counted(ray, &mut ()).is_some()

@@ -35,9 +35,19 @@ pub struct Material<'a> {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum CameraProjection {
     /// A pinhole: vertical field of view in radians, and width / height if the file gives one.
-    Perspective { yfov: f32, aspect_ratio: Option<f32> },
+    Perspective {
+        /// Vertical field of view in radians, in `(0, π)`.
+        yfov: f32,
+        /// Width / height, if the file gives one.
+        aspect_ratio: Option<f32>,
+    },
     /// Parallel rays: half the view's width and height in world units.
-    Orthographic { xmag: f32, ymag: f32 },
+    Orthographic {
+        /// Half the view's width, in world units.
+        xmag: f32,
+        /// Half the view's height, in world units.
+        ymag: f32,
+    },
 }
 
 /// A camera placed in the scene by a glTF node (CAMERAS).
@@ -45,6 +55,7 @@ pub enum CameraProjection {
 pub struct SceneCamera<'a> {
     /// The camera's name, else its node's (may be empty).
     pub name: &'a str,
+    /// Perspective or orthographic, with its parameters.
     pub projection: CameraProjection,
     /// World-space eye point.
     pub position: [f32; 3],
@@ -52,12 +63,15 @@ pub struct SceneCamera<'a> {
     pub forward: [f32; 3],
     /// Unit up direction, orthogonal to `forward`.
     pub up: [f32; 3],
+    /// Near plane distance, ≥ 0.
     pub znear: f32,
     /// `None` = infinite.
     pub zfar: Option<f32>,
-    /// Input, glTF camera index and node index it came from.
+    /// The input (index into the field's inputs) it came from.
     pub input: u32,
+    /// Its glTF camera index in that input.
     pub camera: u32,
+    /// The glTF node that places it.
     pub node: u32,
 }
 
@@ -68,7 +82,12 @@ pub enum LightKind {
     Point,
     /// Emits from `position` in a cone around `direction`: full intensity (candela) within
     /// `inner_cone` radians, fading to zero at `outer_cone`.
-    Spot { inner_cone: f32, outer_cone: f32 },
+    Spot {
+        /// Half-angle of full intensity, in radians.
+        inner_cone: f32,
+        /// Half-angle where the intensity reaches zero, in radians.
+        outer_cone: f32,
+    },
     /// Parallel light travelling along `direction`; intensity in lux.
     Directional,
 }
@@ -78,6 +97,7 @@ pub enum LightKind {
 pub struct SceneLight<'a> {
     /// The light's name, else its node's (may be empty).
     pub name: &'a str,
+    /// Point, spot (with its cone) or directional.
     pub kind: LightKind,
     /// World-space position (point and spot lights).
     pub position: [f32; 3],
@@ -85,12 +105,15 @@ pub struct SceneLight<'a> {
     pub direction: [f32; 3],
     /// Linear RGB.
     pub color: [f32; 3],
+    /// Candela for point and spot lights, lux for directional lights.
     pub intensity: f32,
     /// Distance beyond which the light has no effect; `None` = unlimited.
     pub range: Option<f32>,
-    /// Input, glTF light index and node index it came from.
+    /// The input (index into the field's inputs) it came from.
     pub input: u32,
+    /// Its `KHR_lights_punctual` light index in that input.
     pub light: u32,
+    /// The glTF node that places it.
     pub node: u32,
 }
 

@@ -1,0 +1,792 @@
+//! The C API of the VLF runtime: open a baked visibility field and answer ray queries from C.
+//!
+//! This crate builds `libvlf.a` and `libvlf.so` (`libvlf.dylib`, `vlf.dll`) for C and C++
+//! programs; the declarations are in `include/vlf.h`, which is generated from this file by
+//! cbindgen and checked by a test (`tests/header.rs`). `docs/c-api.md` tells how to build and
+//! link, and `examples/trace_rays.c` is a complete program.
+//!
+//! ```c
+//! VlfField *field = NULL;
+//! if (vlf_open_path("scene.vlf", &field) != VLF_OK) {
+//!     fprintf(stderr, "%s\n", vlf_last_error_message());
+//!     return 1;
+//! }
+//! VlfRay ray = {{0.0f, 0.1f, 2.0f}, 0.0f, {0.0f, 0.0f, -1.0f}, INFINITY};
+//! VlfHit hit;
+//! vlf_closest_hit(field, &ray, &hit);
+//! if (hit.prim != VLF_NO_PRIM) printf("t = %g on triangle %u\n", hit.t, hit.prim);
+//! vlf_close(field);
+//! ```
+//!
+//! # Conventions
+//! - Every function that can fail returns a [`VlfStatus`]: `VLF_OK` (zero) or an error code. On
+//!   an error, [`vlf_last_error_message`] describes it in one line, naming the function, the
+//!   argument or the file. Out-parameters are left untouched on an error unless a function says
+//!   otherwise.
+//! - Every pointer argument is checked: a null pointer gives `VLF_ERR_NULL_ARGUMENT`, a pointer
+//!   not aligned for its type `VLF_ERR_INVALID_ARGUMENT`. Other invalid pointers (dangling, too
+//!   short) cannot be detected and are undefined behaviour, as in any C API.
+//! - No Rust panic crosses into C: should one happen (a bug), it is caught and reported as
+//!   `VLF_ERR_INTERNAL`.
+//! - A miss is not an error: the hit record is [`VLF_NO_PRIM`] with `t = +inf`, as in a hits file
+//!   (`formats/rays.md`). An invalid ray (non-finite or zero direction, NaN bound,
+//!   `tmin > tmax`) misses.
+//!
+//! # Thread safety
+//! A `VlfField` is immutable once open: every query function may be called on the same field
+//! from any number of threads at once, without locking. [`vlf_close`] must not run concurrently
+//! with any other use of that field. The error message is per thread.
+//!
+//! # Lifetimes
+//! A `VlfField` owns its mapping (or its copy of the bytes); the strings that
+//! [`vlf_provenance`] returns point into it and stay valid until [`vlf_close`].
+
+#![deny(missing_docs)]
+
+use std::cell::RefCell;
+use std::ffi::{CStr, CString, c_char, c_void};
+use std::mem::{MaybeUninit, align_of, offset_of, size_of};
+use std::panic::{AssertUnwindSafe, catch_unwind};
+use std::path::Path;
+
+use bytemuck::{Pod, Zeroable};
+use vlf_runtime::{Field, FormatError, Hit, OpenError, Ray};
+
+/// What a call did: `VLF_OK` (0) on success, otherwise why it failed. The values are stable.
+#[allow(non_camel_case_types)]
+#[repr(i32)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum VlfStatus {
+    /// Success.
+    VLF_OK = 0,
+    /// A required pointer argument was null.
+    VLF_ERR_NULL_ARGUMENT = 1,
+    /// An argument was out of range, misaligned, or overlapped another (the message says which).
+    VLF_ERR_INVALID_ARGUMENT = 2,
+    /// The operating system refused to open, read or map the file.
+    VLF_ERR_IO = 3,
+    /// The bytes are not a valid field: wrong magic, unsupported version, corrupt header or
+    /// section table, or (for provenance) a corrupt reference inside a section.
+    VLF_ERR_FORMAT = 4,
+    /// A bug in this library (a caught Rust panic). Please report it with the message.
+    VLF_ERR_INTERNAL = 5,
+    /// Memory for the field could not be allocated (opening from memory, or decoding a packed
+    /// field).
+    VLF_ERR_OUT_OF_MEMORY = 6,
+}
+
+use VlfStatus::*;
+
+/// The triangle id of a miss (`0xFFFFFFFF`), as in a hits file.
+pub const VLF_NO_PRIM: u32 = u32::MAX;
+
+/// The value of an absent index in `VlfProvenance` (`node` outside glTF, `material` when there
+/// is none).
+pub const VLF_NO_INDEX: u32 = u32::MAX;
+
+/// `VlfProvenance.kind`: the triangle came from an OBJ object or group.
+pub const VLF_SOURCE_OBJ: u32 = 1;
+/// `VlfProvenance.kind`: the triangle came from a glTF mesh primitive.
+pub const VLF_SOURCE_GLTF: u32 = 2;
+/// `VlfProvenance.kind`: the triangle was supplied by a program.
+pub const VLF_SOURCE_PROGRAM: u32 = 3;
+
+/// A ray `org + t·dir` for `t` in `[tmin, tmax]`. `dir` need not be unit length; `t` is measured
+/// in units of `dir`. 32 bytes, laid out exactly as a record of a rays file (`formats/rays.md`),
+/// so a rays file read into memory is an array of `VlfRay`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct VlfRay {
+    /// Origin.
+    pub org: [f32; 3],
+    /// Start of the interval (usually 0).
+    pub tmin: f32,
+    /// Direction; any nonzero length.
+    pub dir: [f32; 3],
+    /// End of the interval (`INFINITY` for an unbounded ray).
+    pub tmax: f32,
+}
+
+/// A hit record: 16 bytes, laid out exactly as a record of a hits file (`formats/rays.md`).
+/// On a miss: `t = +inf`, `prim = VLF_NO_PRIM`, `u = v = 0`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct VlfHit {
+    /// The ray parameter of the hit: the hit point is `org + t·dir`.
+    pub t: f32,
+    /// The triangle id, an index into the field's triangles (`vlf_triangle`, `vlf_provenance`).
+    pub prim: u32,
+    /// Barycentric weight of the triangle's second vertex.
+    pub u: f32,
+    /// Barycentric weight of the triangle's third vertex: the hit point is
+    /// `(1 − u − v)·v0 + u·v1 + v·v2`.
+    pub v: f32,
+}
+
+// The C structs are the runtime's, field for field, so arrays pass without a copy.
+const _: () = {
+    assert!(size_of::<VlfRay>() == 32 && size_of::<Ray>() == 32);
+    assert!(align_of::<VlfRay>() == align_of::<Ray>());
+    assert!(offset_of!(VlfRay, org) == offset_of!(Ray, org));
+    assert!(offset_of!(VlfRay, tmin) == offset_of!(Ray, tmin));
+    assert!(offset_of!(VlfRay, dir) == offset_of!(Ray, dir));
+    assert!(offset_of!(VlfRay, tmax) == offset_of!(Ray, tmax));
+    assert!(size_of::<VlfHit>() == 16 && size_of::<Hit>() == 16);
+    assert!(align_of::<VlfHit>() == align_of::<Hit>());
+    assert!(offset_of!(VlfHit, t) == offset_of!(Hit, t));
+    assert!(offset_of!(VlfHit, prim) == offset_of!(Hit, prim));
+    assert!(offset_of!(VlfHit, u) == offset_of!(Hit, u));
+    assert!(offset_of!(VlfHit, v) == offset_of!(Hit, v));
+};
+
+/// Where a triangle came from: its input file, the object or mesh within it, and its index there.
+///
+/// `input` and `name` point into the open field and are **not** NUL-terminated: use them with
+/// their lengths (`printf("%.*s", (int)p.input_len, p.input)`). They are valid UTF-8 and stay
+/// valid until the field is closed.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct VlfProvenance {
+    /// The input file's name (its final path component), `input_len` bytes.
+    pub input: *const c_char,
+    /// Length of `input` in bytes.
+    pub input_len: usize,
+    /// The OBJ object or group name, or the glTF mesh name; may be empty.
+    pub name: *const c_char,
+    /// Length of `name` in bytes.
+    pub name_len: usize,
+    /// `VLF_SOURCE_OBJ`, `VLF_SOURCE_GLTF` or `VLF_SOURCE_PROGRAM`.
+    pub kind: u32,
+    /// The OBJ model index or the glTF mesh index.
+    pub mesh: u32,
+    /// The glTF primitive index within the mesh (0 otherwise).
+    pub primitive: u32,
+    /// The glTF node index (`VLF_NO_INDEX` otherwise).
+    pub node: u32,
+    /// The material index in the input (`VLF_NO_INDEX` if none).
+    pub material: u32,
+    /// The triangle's index within its source.
+    pub index: u32,
+}
+
+/// An open field. Opaque: create it with `vlf_open_path` or `vlf_open_memory`, release it with
+/// `vlf_close`. Immutable, so it may be queried from many threads at once.
+pub struct VlfField {
+    field: Field,
+}
+
+/// A failure on its way to C: the status and the message for `vlf_last_error_message`.
+struct Failure {
+    status: VlfStatus,
+    message: String,
+}
+
+impl Failure {
+    fn null(argument: &str) -> Failure {
+        Failure { status: VLF_ERR_NULL_ARGUMENT, message: format!("argument `{argument}` is null") }
+    }
+    fn invalid(message: String) -> Failure {
+        Failure { status: VLF_ERR_INVALID_ARGUMENT, message }
+    }
+}
+
+impl From<OpenError> for Failure {
+    fn from(e: OpenError) -> Failure {
+        let status = match e {
+            OpenError::Io { .. } => VLF_ERR_IO,
+            OpenError::Format { error: FormatError::OutOfMemory { .. }, .. }
+            | OpenError::Bytes(FormatError::OutOfMemory { .. }) => VLF_ERR_OUT_OF_MEMORY,
+            _ => VLF_ERR_FORMAT,
+        };
+        Failure { status, message: e.to_string() }
+    }
+}
+
+thread_local! {
+    /// The message of the last failed call on this thread.
+    static LAST_ERROR: RefCell<CString> = RefCell::new(CString::default());
+}
+
+fn set_last_error(message: String) {
+    // A message never contains NUL, but a path could: show it rather than cut the message there.
+    let message = CString::new(message.replace('\0', "\\0")).unwrap_or_default();
+    LAST_ERROR.with(|e| *e.borrow_mut() = message);
+}
+
+/// Runs the body of entry point `function`, turning its failure or a panic into a status and the
+/// thread's last error message.
+fn call(function: &str, body: impl FnOnce() -> Result<(), Failure>) -> VlfStatus {
+    match catch_unwind(AssertUnwindSafe(body)) {
+        Ok(Ok(())) => VLF_OK,
+        Ok(Err(f)) => {
+            set_last_error(format!("{function}: {}", f.message));
+            f.status
+        }
+        Err(panic) => {
+            let what = panic
+                .downcast_ref::<&str>()
+                .copied()
+                .or_else(|| panic.downcast_ref::<String>().map(String::as_str))
+                .unwrap_or("unknown panic");
+            set_last_error(format!("{function}: internal error (a bug in the VLF library, please report it): {what}"));
+            VLF_ERR_INTERNAL
+        }
+    }
+}
+
+/// `&*p`, or a failure naming `argument` if `p` is null or misaligned.
+///
+/// # Safety
+/// A non-null, aligned `p` must point to a valid `T` that outlives `'a` and is not written
+/// through another pointer meanwhile.
+unsafe fn arg<'a, T>(p: *const T, argument: &str) -> Result<&'a T, Failure> {
+    if p.is_null() {
+        return Err(Failure::null(argument));
+    }
+    if !p.is_aligned() {
+        return Err(Failure::invalid(format!("argument `{argument}` is not aligned to {} bytes", align_of::<T>())));
+    }
+    // SAFETY: non-null and aligned, checked above; validity is the caller's promise.
+    Ok(unsafe { &*p })
+}
+
+/// `&mut *p`, or a failure naming `argument` if `p` is null or misaligned.
+///
+/// # Safety
+/// A non-null, aligned `p` must be valid for writes of a `T` for `'a`, with no other reference to
+/// that memory meanwhile. The memory need not be initialised (callers only write through it).
+unsafe fn out<'a, T>(p: *mut T, argument: &str) -> Result<&'a mut MaybeUninit<T>, Failure> {
+    if p.is_null() {
+        return Err(Failure::null(argument));
+    }
+    if !p.is_aligned() {
+        return Err(Failure::invalid(format!("argument `{argument}` is not aligned to {} bytes", align_of::<T>())));
+    }
+    // SAFETY: non-null and aligned, checked above; `MaybeUninit` asks nothing of the contents;
+    // validity for writes is the caller's promise.
+    Ok(unsafe { &mut *p.cast() })
+}
+
+/// The field behind a handle, or a failure if it is null.
+///
+/// # Safety
+/// A non-null `field` must come from `vlf_open_*` and not have been closed.
+unsafe fn field_arg<'a>(field: *const VlfField) -> Result<&'a Field, Failure> {
+    // SAFETY: the caller's promise.
+    Ok(&unsafe { arg(field, "field") }?.field)
+}
+
+/// The byte range `[p, p + len)` as integers, for overlap checks.
+fn span<T>(p: *const T, n: usize) -> std::ops::Range<usize> {
+    let start = p as usize;
+    start..start.saturating_add(n.saturating_mul(size_of::<T>()))
+}
+
+/// A slice of `n` elements at `p`; `p` may be null when `n` is 0.
+///
+/// # Safety
+/// When `n > 0`, a non-null aligned `p` must point to `n` valid, initialised elements that
+/// outlive `'a` and are not written meanwhile.
+unsafe fn slice_arg<'a, T>(p: *const T, n: usize, argument: &str) -> Result<&'a [T], Failure> {
+    check_array(p, n, argument)?;
+    if n == 0 {
+        return Ok(&[]);
+    }
+    // SAFETY: non-null, aligned, and `n · size_of::<T>() ≤ isize::MAX` (checked); the caller
+    // promises the elements are valid.
+    Ok(unsafe { std::slice::from_raw_parts(p, n) })
+}
+
+/// Room for `n` elements at `p`, to be written; `p` may be null when `n` is 0.
+///
+/// # Safety
+/// When `n > 0`, a non-null aligned `p` must be valid for writes of `n` elements for `'a`, with
+/// no other reference to that memory meanwhile. The memory need not be initialised.
+unsafe fn slice_out<'a, T>(p: *mut T, n: usize, argument: &str) -> Result<&'a mut [MaybeUninit<T>], Failure> {
+    check_array(p, n, argument)?;
+    if n == 0 {
+        return Ok(&mut []);
+    }
+    // SAFETY: non-null, aligned, and `n · size_of::<T>() ≤ isize::MAX` (checked); validity for
+    // writes is the caller's promise; `MaybeUninit` asks nothing of the contents.
+    Ok(unsafe { std::slice::from_raw_parts_mut(p.cast(), n) })
+}
+
+/// Writes `values` to the start of `out`.
+fn write_all<T: Copy>(out: &mut [MaybeUninit<T>], values: &[T]) {
+    for (o, v) in out.iter_mut().zip(values) {
+        o.write(*v);
+    }
+}
+
+/// Checks that `p` can hold an array of `n` elements: anything goes for `n = 0`; otherwise `p` is
+/// non-null and aligned, and the array's size fits in an `isize`.
+fn check_array<T>(p: *const T, n: usize, argument: &str) -> Result<(), Failure> {
+    if n == 0 {
+        return Ok(());
+    }
+    if p.is_null() {
+        return Err(Failure::null(argument));
+    }
+    if !p.is_aligned() {
+        return Err(Failure::invalid(format!("argument `{argument}` is not aligned to {} bytes", align_of::<T>())));
+    }
+    if n.checked_mul(size_of::<T>()).is_none_or(|b| b > isize::MAX as usize) {
+        return Err(Failure::invalid(format!("count {n} is too large for `{argument}`")));
+    }
+    Ok(())
+}
+
+fn check_disjoint(a: std::ops::Range<usize>, b: std::ops::Range<usize>, what: &str) -> Result<(), Failure> {
+    if a.start < b.end && b.start < a.end {
+        return Err(Failure::invalid(format!("{what} overlap")));
+    }
+    Ok(())
+}
+
+fn triangle_range(field: &Field, prim: u32) -> Result<(), Failure> {
+    let count = field.triangle_count();
+    if prim >= count {
+        return Err(Failure::invalid(format!("triangle id {prim} is out of range: the field has {count} triangles")));
+    }
+    Ok(())
+}
+
+/// The version of this library, e.g. `"0.1.0"`: a static NUL-terminated string.
+#[unsafe(no_mangle)]
+pub extern "C" fn vlf_version() -> *const c_char {
+    concat!(env!("CARGO_PKG_VERSION"), "\0").as_ptr().cast()
+}
+
+/// The name of a status code, e.g. `"VLF_ERR_IO"`, or `"unknown status"`: a static
+/// NUL-terminated string.
+#[unsafe(no_mangle)]
+pub extern "C" fn vlf_status_name(status: i32) -> *const c_char {
+    let name: &CStr = match status {
+        0 => c"VLF_OK",
+        1 => c"VLF_ERR_NULL_ARGUMENT",
+        2 => c"VLF_ERR_INVALID_ARGUMENT",
+        3 => c"VLF_ERR_IO",
+        4 => c"VLF_ERR_FORMAT",
+        5 => c"VLF_ERR_INTERNAL",
+        6 => c"VLF_ERR_OUT_OF_MEMORY",
+        _ => c"unknown status",
+    };
+    name.as_ptr()
+}
+
+/// The message of the last call on this thread that failed: one line naming the function and
+/// what went wrong (the argument, or the file and the fault), e.g.
+/// `vlf_open_path: cannot read field scene.vlf: No such file or directory (os error 2)`.
+/// An empty string if no call on this thread has failed.
+///
+/// The string belongs to the library. It is valid until the next failing call on the same
+/// thread, or until the thread exits; copy it to keep it. Successful calls leave it unchanged,
+/// so read it right after a call returns an error.
+#[unsafe(no_mangle)]
+pub extern "C" fn vlf_last_error_message() -> *const c_char {
+    // The CString's heap buffer stays put until the next `set_last_error` on this thread.
+    LAST_ERROR.with(|e| e.borrow().as_ptr())
+}
+
+/// Opens the field file at `path` (a NUL-terminated path in the platform's encoding) by
+/// memory-mapping it, and stores the new handle in `*out`.
+///
+/// Checks the header, the section table and the content hash, and reads nothing else: the time
+/// does not depend on the file's size. Queries then read the mapped bytes on demand. A packed
+/// field (`vlf-bake pack`) is the exception: it is decoded into memory here, in time and memory
+/// linear in its size.
+///
+/// The file must not be modified in place or truncated while the field is open (files written by
+/// `vlf-bake` are replaced by renaming, which is safe). In-place changes give wrong answers; a
+/// truncation makes the operating system raise `SIGBUS`. Use `vlf_open_memory` if that cannot be
+/// ruled out.
+///
+/// Returns `VLF_OK`; `VLF_ERR_IO` if the file cannot be opened or mapped; `VLF_ERR_FORMAT` if it
+/// is not a valid field (or a packed field that does not decode); `VLF_ERR_OUT_OF_MEMORY` if a
+/// packed field's decoded bytes cannot be allocated; `VLF_ERR_NULL_ARGUMENT`. `*out` is set to
+/// NULL on failure.
+///
+/// # Safety
+/// `path` must be NULL or a NUL-terminated string; `out` must be NULL or valid for writing a
+/// pointer.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn vlf_open_path(path: *const c_char, out: *mut *mut VlfField) -> VlfStatus {
+    call("vlf_open_path", || {
+        // SAFETY: the caller's promise on `out`.
+        let out = unsafe { self::out(out, "out") }?;
+        out.write(std::ptr::null_mut());
+        if path.is_null() {
+            return Err(Failure::null("path"));
+        }
+        // SAFETY: non-null, and NUL-terminated by the caller's promise.
+        let bytes = unsafe { CStr::from_ptr(path) }.to_bytes();
+        let field = Field::open(path_of(bytes)?)?;
+        out.write(Box::into_raw(Box::new(VlfField { field })));
+        Ok(())
+    })
+}
+
+#[cfg(unix)]
+fn path_of(bytes: &[u8]) -> Result<&Path, Failure> {
+    use std::os::unix::ffi::OsStrExt;
+    Ok(Path::new(std::ffi::OsStr::from_bytes(bytes)))
+}
+
+#[cfg(not(unix))]
+fn path_of(bytes: &[u8]) -> Result<&Path, Failure> {
+    std::str::from_utf8(bytes)
+        .map(Path::new)
+        .map_err(|_| Failure::invalid("argument `path` is not valid UTF-8".to_owned()))
+}
+
+/// Opens a field from `len` bytes at `data` and stores the new handle in `*out`.
+///
+/// The bytes are **copied** once into a buffer the field owns (aligned as the sections need; a
+/// packed field is decoded into it), so `data` may be freed or reused as soon as this returns,
+/// and nothing can change the field's bytes afterwards. Time and memory are linear in `len`; for
+/// large files prefer `vlf_open_path`, which maps the file instead.
+///
+/// Returns `VLF_OK`; `VLF_ERR_FORMAT` if the bytes are not a valid field;
+/// `VLF_ERR_OUT_OF_MEMORY` if the copy cannot be allocated; `VLF_ERR_NULL_ARGUMENT` if `data` or
+/// `out` is NULL. `*out` is set to NULL on failure.
+///
+/// # Safety
+/// `data` must be NULL or point to `len` readable bytes; `out` must be NULL or valid for writing
+/// a pointer.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn vlf_open_memory(data: *const c_void, len: usize, out: *mut *mut VlfField) -> VlfStatus {
+    call("vlf_open_memory", || {
+        // SAFETY: the caller's promise on `out`.
+        let out = unsafe { self::out(out, "out") }?;
+        out.write(std::ptr::null_mut());
+        if data.is_null() {
+            return Err(Failure::null("data"));
+        }
+        // SAFETY: byte pointers need no alignment; `len` readable bytes by the caller's promise.
+        let bytes = unsafe { slice_arg(data.cast::<u8>(), len, "data") }?;
+        let field = Field::from_bytes(bytes)?;
+        out.write(Box::into_raw(Box::new(VlfField { field })));
+        Ok(())
+    })
+}
+
+/// Closes a field: unmaps or frees its bytes. The handle and every provenance string obtained
+/// from it become invalid. NULL is ignored. Must not run concurrently with any other use of the
+/// same field.
+///
+/// # Safety
+/// `field` must be NULL or a handle from `vlf_open_*` that has not been closed.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn vlf_close(field: *mut VlfField) {
+    if field.is_null() {
+        return;
+    }
+    // Dropping a Field unmaps or frees memory; it cannot panic, but no unwind may reach C.
+    let _ = catch_unwind(AssertUnwindSafe(|| {
+        // SAFETY: a live handle from `Box::into_raw` in `vlf_open_*`, closed once (the caller's
+        // promise).
+        drop(unsafe { Box::from_raw(field) });
+    }));
+}
+
+/// Traces `ray` and writes its closest hit on `[tmin, tmax]` to `*hit` (the miss record if
+/// nothing is hit). The same answer, bit for bit, as the Rust `Field::closest_hit`.
+///
+/// Constant time to find the ray's beams, then a walk over the tiles the ray crosses; allocates
+/// nothing. Safe to call from many threads on the same field.
+///
+/// Returns `VLF_OK` (hit or miss) or `VLF_ERR_NULL_ARGUMENT`.
+///
+/// # Safety
+/// `field` must be NULL or an open handle; `ray` NULL or a valid ray; `hit` NULL or writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn vlf_closest_hit(field: *const VlfField, ray: *const VlfRay, hit: *mut VlfHit) -> VlfStatus {
+    call("vlf_closest_hit", || {
+        // SAFETY: the caller's promises, argument by argument.
+        let (field, ray, hit) = unsafe { (field_arg(field)?, arg(ray, "ray")?, out(hit, "hit")?) };
+        let h = Hit::record(field.closest_hit(bytemuck::cast_ref(ray)));
+        hit.write(bytemuck::cast(h));
+        Ok(())
+    })
+}
+
+/// Traces `ray` for any hit on `[tmin, tmax]` (a shadow ray): writes 1 to `*hit` if something is
+/// hit, 0 if not. Stops at the first hit found, so it is never slower than `vlf_closest_hit`.
+///
+/// Returns `VLF_OK` or `VLF_ERR_NULL_ARGUMENT`.
+///
+/// # Safety
+/// `field` must be NULL or an open handle; `ray` NULL or a valid ray; `hit` NULL or writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn vlf_any_hit(field: *const VlfField, ray: *const VlfRay, hit: *mut u8) -> VlfStatus {
+    call("vlf_any_hit", || {
+        // SAFETY: the caller's promises, argument by argument.
+        let (field, ray, hit) = unsafe { (field_arg(field)?, arg(ray, "ray")?, out(hit, "hit")?) };
+        hit.write(field.any_hit(bytemuck::cast_ref(ray)) as u8);
+        Ok(())
+    })
+}
+
+/// Traces `n` rays: `hits[i]` receives the closest hit of `rays[i]` (the miss record if none), as
+/// `vlf_closest_hit` would. Runs on the calling thread; to use several cores, call it from several
+/// threads on disjoint parts of the arrays.
+///
+/// `rays` and `hits` may be NULL when `n` is 0, and must not overlap.
+///
+/// Returns `VLF_OK`, `VLF_ERR_NULL_ARGUMENT`, or `VLF_ERR_INVALID_ARGUMENT` (misaligned or
+/// overlapping arrays, or `n` too large); on an error nothing is written.
+///
+/// # Safety
+/// `field` must be NULL or an open handle; `rays` must point to `n` rays and `hits` to room for
+/// `n` hits (or be NULL).
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn vlf_closest_hits(
+    field: *const VlfField,
+    rays: *const VlfRay,
+    n: usize,
+    hits: *mut VlfHit,
+) -> VlfStatus {
+    call("vlf_closest_hits", || {
+        // SAFETY: the caller's promise on `field`.
+        let field = unsafe { field_arg(field) }?;
+        check_array(rays, n, "rays")?;
+        check_array(hits, n, "hits")?;
+        check_disjoint(span(rays, n), span(hits, n), "arrays `rays` and `hits`")?;
+        // SAFETY: the caller's promises on the arrays; they do not overlap (checked).
+        let (rays, hits) = unsafe { (slice_arg(rays, n, "rays")?, slice_out(hits, n, "hits")?) };
+        let view = field.view();
+        for (ray, hit) in rays.iter().zip(hits) {
+            hit.write(bytemuck::cast(Hit::record(view.closest_hit(bytemuck::cast_ref(ray)))));
+        }
+        Ok(())
+    })
+}
+
+/// Traces `n` rays for any hit: `hits[i]` receives 1 if `rays[i]` hits something, 0 if not, as
+/// `vlf_any_hit` would. Runs on the calling thread.
+///
+/// `rays` and `hits` may be NULL when `n` is 0, and must not overlap.
+///
+/// Returns `VLF_OK`, `VLF_ERR_NULL_ARGUMENT`, or `VLF_ERR_INVALID_ARGUMENT` (misaligned or
+/// overlapping arrays, or `n` too large); on an error nothing is written.
+///
+/// # Safety
+/// `field` must be NULL or an open handle; `rays` must point to `n` rays and `hits` to `n`
+/// writable bytes (or be NULL).
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn vlf_any_hits(
+    field: *const VlfField,
+    rays: *const VlfRay,
+    n: usize,
+    hits: *mut u8,
+) -> VlfStatus {
+    call("vlf_any_hits", || {
+        // SAFETY: the caller's promise on `field`.
+        let field = unsafe { field_arg(field) }?;
+        check_array(rays, n, "rays")?;
+        check_array(hits, n, "hits")?;
+        check_disjoint(span(rays, n), span(hits, n), "arrays `rays` and `hits`")?;
+        // SAFETY: the caller's promises on the arrays; they do not overlap (checked).
+        let (rays, hits) = unsafe { (slice_arg(rays, n, "rays")?, slice_out(hits, n, "hits")?) };
+        let view = field.view();
+        for (ray, hit) in rays.iter().zip(hits) {
+            hit.write(view.any_hit(bytemuck::cast_ref(ray)) as u8);
+        }
+        Ok(())
+    })
+}
+
+/// The number of triangles in the field, in `*count`. Triangle ids run from 0 to `count − 1`.
+///
+/// Returns `VLF_OK` or `VLF_ERR_NULL_ARGUMENT`.
+///
+/// # Safety
+/// `field` must be NULL or an open handle; `count` NULL or writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn vlf_triangle_count(field: *const VlfField, count: *mut u32) -> VlfStatus {
+    call("vlf_triangle_count", || {
+        // SAFETY: the caller's promises.
+        let (field, count) = unsafe { (field_arg(field)?, out(count, "count")?) };
+        count.write(field.triangle_count());
+        Ok(())
+    })
+}
+
+/// The vertices of triangle `prim`, in `vertices[0..9]`: `v0.x, v0.y, v0.z, v1.x, …, v2.z`.
+///
+/// Returns `VLF_OK`, `VLF_ERR_NULL_ARGUMENT`, or `VLF_ERR_INVALID_ARGUMENT` if `prim` is not
+/// below the triangle count.
+///
+/// # Safety
+/// `field` must be NULL or an open handle; `vertices` NULL or room for 9 floats.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn vlf_triangle(field: *const VlfField, prim: u32, vertices: *mut f32) -> VlfStatus {
+    call("vlf_triangle", || {
+        // SAFETY: the caller's promises.
+        let (field, vertices) = unsafe { (field_arg(field)?, slice_out(vertices, 9, "vertices")?) };
+        triangle_range(field, prim)?;
+        let t = field.triangle(prim).ok_or_else(|| Failure::invalid(format!("no triangle {prim}")))?;
+        write_all(vertices, t.as_flattened());
+        Ok(())
+    })
+}
+
+/// Where triangle `prim` came from, in `*provenance`. Its strings point into the field and stay
+/// valid until `vlf_close`; they are not NUL-terminated.
+///
+/// Returns `VLF_OK`; `VLF_ERR_INVALID_ARGUMENT` if `prim` is not below the triangle count;
+/// `VLF_ERR_FORMAT` if the field's provenance of that triangle is corrupt (a reference out of
+/// bounds or a name that is not UTF-8: the open checks do not read that deep);
+/// `VLF_ERR_NULL_ARGUMENT`.
+///
+/// # Safety
+/// `field` must be NULL or an open handle; `provenance` NULL or writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn vlf_provenance(
+    field: *const VlfField,
+    prim: u32,
+    provenance: *mut VlfProvenance,
+) -> VlfStatus {
+    call("vlf_provenance", || {
+        // SAFETY: the caller's promises.
+        let (field, provenance) = unsafe { (field_arg(field)?, out(provenance, "provenance")?) };
+        triangle_range(field, prim)?;
+        let p = field.provenance(prim).ok_or_else(|| Failure {
+            status: VLF_ERR_FORMAT,
+            message: format!("the provenance of triangle {prim} is corrupt (run `vlf-bake dump --verify`)"),
+        })?;
+        provenance.write(VlfProvenance {
+            input: p.input.as_ptr().cast(),
+            input_len: p.input.len(),
+            name: p.name.as_ptr().cast(),
+            name_len: p.name.len(),
+            kind: p.kind,
+            mesh: p.mesh,
+            primitive: p.primitive,
+            node: p.node,
+            material: p.material,
+            index: p.index,
+        });
+        Ok(())
+    })
+}
+
+/// The field's content hash (`formats/vlf.md` §3.1), 32 bytes written to `hash[0..32]`. It
+/// identifies the file's exact bytes; `vlf-bake dump` prints it in hex.
+///
+/// Returns `VLF_OK` or `VLF_ERR_NULL_ARGUMENT`.
+///
+/// # Safety
+/// `field` must be NULL or an open handle; `hash` NULL or room for 32 bytes.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn vlf_content_hash(field: *const VlfField, hash: *mut u8) -> VlfStatus {
+    call("vlf_content_hash", || {
+        // SAFETY: the caller's promises.
+        let (field, hash) = unsafe { (field_arg(field)?, slice_out(hash, 32, "hash")?) };
+        write_all(hash, &field.content_hash());
+        Ok(())
+    })
+}
+
+/// The field's input hash (`formats/vlf.md` §3.2), 32 bytes written to `hash[0..32]`. It
+/// identifies the bake's inputs and parameters: two fields baked from the same meshes with the
+/// same parameters share it.
+///
+/// Returns `VLF_OK` or `VLF_ERR_NULL_ARGUMENT`.
+///
+/// # Safety
+/// `field` must be NULL or an open handle; `hash` NULL or room for 32 bytes.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn vlf_input_hash(field: *const VlfField, hash: *mut u8) -> VlfStatus {
+    call("vlf_input_hash", || {
+        // SAFETY: the caller's promises.
+        let (field, hash) = unsafe { (field_arg(field)?, slice_out(hash, 32, "hash")?) };
+        write_all(hash, &field.input_hash());
+        Ok(())
+    })
+}
+
+/// The scene's bounding sphere: centre in `center[0..3]`, radius in `*radius`. Every triangle
+/// lies inside it; use it to place a camera.
+///
+/// Returns `VLF_OK` or `VLF_ERR_NULL_ARGUMENT`.
+///
+/// # Safety
+/// `field` must be NULL or an open handle; `center` NULL or room for 3 doubles; `radius` NULL or
+/// writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn vlf_bounding_sphere(field: *const VlfField, center: *mut f64, radius: *mut f64) -> VlfStatus {
+    call("vlf_bounding_sphere", || {
+        // SAFETY: the caller's promise on `field`.
+        let field = unsafe { field_arg(field) }?;
+        check_array(center, 3, "center")?;
+        check_array(radius, 1, "radius")?;
+        check_disjoint(span(center, 3), span(radius, 1), "arguments `center` and `radius`")?;
+        // SAFETY: the caller's promises; the outputs do not overlap (checked).
+        let (center, radius) = unsafe { (slice_out(center, 3, "center")?, out(radius, "radius")?) };
+        let (c, r) = field.bounding_sphere();
+        write_all(center, &c);
+        radius.write(r);
+        Ok(())
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn last_error() -> String {
+        // SAFETY: `vlf_last_error_message` returns a NUL-terminated string owned by this thread.
+        unsafe { CStr::from_ptr(vlf_last_error_message()) }.to_string_lossy().into_owned()
+    }
+
+    #[test]
+    fn a_panic_becomes_an_internal_error() {
+        let status = call("vlf_test", || panic!("boom {}", 42));
+        assert_eq!(status, VLF_ERR_INTERNAL);
+        assert_eq!(last_error(), "vlf_test: internal error (a bug in the VLF library, please report it): boom 42");
+    }
+
+    #[test]
+    fn failures_set_the_message_and_successes_keep_it() {
+        assert_eq!(call("vlf_test", || Err(Failure::null("thing"))), VLF_ERR_NULL_ARGUMENT);
+        assert_eq!(last_error(), "vlf_test: argument `thing` is null");
+        assert_eq!(call("vlf_test", || Ok(())), VLF_OK);
+        assert_eq!(last_error(), "vlf_test: argument `thing` is null");
+        // A NUL inside a message (from a path) is shown, not allowed to cut the message short.
+        assert_eq!(call("vlf_test", || Err(Failure::invalid("a\0b".into()))), VLF_ERR_INVALID_ARGUMENT);
+        assert_eq!(last_error(), "vlf_test: a\\0b");
+    }
+
+    #[test]
+    fn status_names_match_the_enum() {
+        for s in [
+            VLF_OK,
+            VLF_ERR_NULL_ARGUMENT,
+            VLF_ERR_INVALID_ARGUMENT,
+            VLF_ERR_IO,
+            VLF_ERR_FORMAT,
+            VLF_ERR_INTERNAL,
+            VLF_ERR_OUT_OF_MEMORY,
+        ] {
+            // SAFETY: static NUL-terminated strings.
+            let name = unsafe { CStr::from_ptr(vlf_status_name(s as i32)) };
+            assert_eq!(name.to_str().unwrap(), format!("{s:?}"));
+        }
+    }
+
+    #[test]
+    fn open_errors_map_to_codes() {
+        let mut field: *mut VlfField = std::ptr::NonNull::dangling().as_ptr();
+        let bytes = [0u8; 200];
+        // SAFETY: valid pointers and lengths.
+        let status = unsafe { vlf_open_memory(bytes.as_ptr().cast(), bytes.len(), &mut field) };
+        assert_eq!((status, field.is_null()), (VLF_ERR_FORMAT, true));
+        assert!(last_error().starts_with("vlf_open_memory: not a valid field: bad magic"), "{}", last_error());
+        // SAFETY: a NUL-terminated path.
+        let status = unsafe { vlf_open_path(c"/nonexistent/field.vlf".as_ptr(), &mut field) };
+        assert_eq!((status, field.is_null()), (VLF_ERR_IO, true));
+        assert!(last_error().contains("/nonexistent/field.vlf"), "{}", last_error());
+    }
+}
