@@ -162,6 +162,17 @@ fn check_queries(field: &Field, ray: &Ray) {
     assert_eq!(view.closest_hit_counted(ray, &mut stats), closest, "counting changed the answer for {ray:?}");
     let first = view.any_hit_counted(ray, &mut stats);
     assert_eq!(first.is_some(), any, "any_hit_counted disagrees with any_hit for {ray:?}");
+    // The work is bounded by the file, whatever it claims: a ray crosses at most 2n + 1 tiles, and
+    // visits in each at most the leaves LEAF_BOUNDS holds.
+    let n = field.tile_resolution() as u64;
+    assert!(stats.cells <= stats.rays * (2 * n + 1), "{} tiles visited by {} rays, n = {n}", stats.cells, stats.rays);
+    let leaf_bounds = field.reader().leaf_bounds.len() as u64;
+    assert!(
+        stats.leaves <= stats.cells * leaf_bounds.max(1),
+        "{} leaves visited in {} tiles, but LEAF_BOUNDS holds {leaf_bounds} bounds: {ray:?}",
+        stats.leaves,
+        stats.cells
+    );
     for hit in closest.iter().chain(&first) {
         assert!(field.triangle(hit.prim).is_some(), "hit names triangle {} of {}", hit.prim, field.triangle_count());
         assert!(ray.tmin <= hit.t && hit.t <= ray.tmax, "hit t = {} outside [{}, {}]", hit.t, ray.tmin, ray.tmax);
