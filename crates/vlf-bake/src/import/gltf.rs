@@ -82,6 +82,14 @@ pub(super) fn import(
 
     // The raw JSON, for what the typed document drops (extensions on primitives and buffer views).
     let json: Cow<[u8]> = if bytes.starts_with(b"glTF") {
+        // The crate subtracts the header's size from the declared length unchecked.
+        if let Some(declared) = bytes.get(8..12).map(|b| u32::from_le_bytes(b.try_into().expect("four bytes"))) {
+            if declared < 12 {
+                return Err(ctx.err(format!(
+                    "not a valid GLB container: its header declares a length of {declared} bytes, less than the 12-byte header"
+                )));
+            }
+        }
         gl::Glb::from_slice(bytes).map_err(|e| ctx.err(format!("not a valid GLB container: {e}")))?.json
     } else {
         Cow::Borrowed(bytes)
