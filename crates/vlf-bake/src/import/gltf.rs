@@ -82,14 +82,6 @@ pub(super) fn import(
 
     // The raw JSON, for what the typed document drops (extensions on primitives and buffer views).
     let json: Cow<[u8]> = if bytes.starts_with(b"glTF") {
-        // The crate subtracts the header's size from the declared length unchecked.
-        if let Some(declared) = bytes.get(8..12).map(|b| u32::from_le_bytes(b.try_into().expect("four bytes"))) {
-            if declared < 12 {
-                return Err(ctx.err(format!(
-                    "not a valid GLB container: its header declares a length of {declared} bytes, less than the 12-byte header"
-                )));
-            }
-        }
         gl::Glb::from_slice(bytes).map_err(|e| ctx.err(format!("not a valid GLB container: {e}")))?.json
     } else {
         Cow::Borrowed(bytes)
@@ -205,6 +197,12 @@ fn check_container(ctx: &Ctx, bytes: &[u8]) -> Result<(), ImportError> {
     };
     if version != 2 {
         return Err(ctx.err(format!("GLB version {version} is not supported (glTF 2.0 files are GLB version 2)")));
+    }
+    // The crate subtracts the header's size from the declared length unchecked.
+    if (length as usize) < GLB_HEADER {
+        return Err(ctx.err(format!(
+            "not a valid GLB container: its header gives its length as {length} bytes, less than the {GLB_HEADER}-byte header"
+        )));
     }
     if length as usize > bytes.len() {
         return Err(ctx.err(format!(
