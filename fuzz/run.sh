@@ -29,6 +29,6 @@ echo "$target: started $start, ${seconds} s: $(stat number_of_executed_units) ex
     "$(stat average_exec_per_sec) exec/s, cov $cov, ft $ft, corpus $corp," \
     "peak RSS $(stat peak_rss_mb) MB, exit $status"
 if [ "$status" -ne 0 ]; then
-    grep -E 'ERROR|panicked|SUMMARY|Test unit written' "$log" | head -n 20 || true
+    grep -iE 'error|panicked|SUMMARY|Test unit written' "$log" | head -n 20 || true
 fi
 exit "$status"
