@@ -12,6 +12,8 @@
 //!   magnitude from an edge of its triangle), the ray is counted as ambiguous and reported, not
 //!   failed.
 
+pub mod fuzz;
+
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 use vlf_bake::generate::Rng;

@@ -54,6 +54,8 @@ const PRIMITIVE_COMPRESSION: &str = "KHR_draco_mesh_compression";
 struct Ctx<'p> {
     path: &'p Path,
     input: u32,
+    /// Fetches external buffers.
+    read_file: &'p dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
 }
 
 impl Ctx<'_> {
@@ -66,9 +68,16 @@ impl Ctx<'_> {
     }
 }
 
-/// Imports the glTF or GLB file `bytes` (read from `path`) as input `input`.
-pub(super) fn import(builder: &mut SceneBuilder, input: u32, path: &Path, bytes: &[u8]) -> Result<(), ImportError> {
-    let ctx = Ctx { path, input };
+/// Imports the glTF or GLB file `bytes` (read from `path`) as input `input`; external buffers are
+/// fetched with `read_file`.
+pub(super) fn import(
+    builder: &mut SceneBuilder,
+    input: u32,
+    path: &Path,
+    bytes: &[u8],
+    read_file: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
+) -> Result<(), ImportError> {
+    let ctx = Ctx { path, input, read_file };
     check_container(&ctx, bytes)?;
 
     // The raw JSON, for what the typed document drops (extensions on primitives and buffer views).
@@ -188,6 +197,12 @@ fn check_container(ctx: &Ctx, bytes: &[u8]) -> Result<(), ImportError> {
     };
     if version != 2 {
         return Err(ctx.err(format!("GLB version {version} is not supported (glTF 2.0 files are GLB version 2)")));
+    }
+    // The crate subtracts the header's size from the declared length unchecked.
+    if (length as usize) < GLB_HEADER {
+        return Err(ctx.err(format!(
+            "not a valid GLB container: its header gives its length as {length} bytes, less than the {GLB_HEADER}-byte header"
+        )));
     }
     if length as usize > bytes.len() {
         return Err(ctx.err(format!(
@@ -315,7 +330,7 @@ fn load_buffers(ctx: &Ctx, document: &gl::Document, mut blob: Option<Vec<u8>>) -
             }
             gl::buffer::Source::Uri(uri) => {
                 let file = resolve_uri(base, uri).map_err(|why| ctx.err(format!("buffer {i}: URI {uri:?}: {why}")))?;
-                std::fs::read(&file).map_err(|e| {
+                (ctx.read_file)(&file).map_err(|e| {
                     ctx.err(format!("buffer {i}: cannot read external file {uri:?} ({}): {e}", file.display()))
                 })?
             }

@@ -1,7 +1,7 @@
 //! Mesh importers: Wavefront OBJ (through `tobj`) and glTF 2.0 (through `gltf`).
 //!
 //! [`import_paths`] turns a list of files into one [`Scene`]; [`import_path`] adds one file to a
-//! [`SceneBuilder`]. Each file becomes one INPUTS record (its final path component and the BLAKE3
+//! [`SceneBuilder`]; [`import_bytes`] adds a mesh held in memory. Each file becomes one INPUTS record (its final path component and the BLAKE3
 //! hash of its bytes); each OBJ object/group and each glTF primitive instanced by a node becomes one
 //! SOURCES record. The importers never panic on malformed input: every problem is an
 //! [`ImportError`] naming the file.
@@ -32,17 +32,31 @@ pub fn import_paths(paths: &[impl AsRef<Path>]) -> Result<Scene, ImportError> {
 /// others are counted, with a warning naming the file.
 pub fn import_path(builder: &mut SceneBuilder, path: &Path) -> Result<(), ImportError> {
     let bytes = std::fs::read(path).map_err(|error| ImportError::Io { path: path.to_path_buf(), error })?;
+    import_bytes(builder, path, &bytes, &|file| std::fs::read(file))
+}
+
+/// Adds a mesh held in memory to a builder, exactly as [`import_path`] adds a file: `path` names
+/// it (its extension chooses the format, its final component is the stored input name, and files
+/// the mesh refers to are resolved against its directory), and `read_file` fetches those files
+/// (OBJ material libraries, external glTF buffers). [`import_path`] passes [`std::fs::read`]; a
+/// caller holding everything in memory passes a closure that serves the bytes it has.
+pub fn import_bytes(
+    builder: &mut SceneBuilder,
+    path: &Path,
+    bytes: &[u8],
+    read_file: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
+) -> Result<(), ImportError> {
     if bytes.is_empty() {
         return Err(ImportError::Empty { path: path.to_path_buf() });
     }
-    let format = detect_format(path, &bytes).ok_or_else(|| ImportError::UnknownFormat { path: path.to_path_buf() })?;
+    let format = detect_format(path, bytes).ok_or_else(|| ImportError::UnknownFormat { path: path.to_path_buf() })?;
     let before = builder.triangle_count();
     let report = builder.report_mut();
     let (dropped, points, lines) = (report.dropped_degenerate, report.skipped_points, report.skipped_lines);
-    let input = builder.begin_input(&path.to_string_lossy(), *blake3::hash(&bytes).as_bytes());
+    let input = builder.begin_input(&path.to_string_lossy(), *blake3::hash(bytes).as_bytes());
     match format {
-        Format::Obj => obj::import(builder, input, path, &bytes)?,
-        Format::Gltf => gltf::import(builder, input, path, &bytes)?,
+        Format::Obj => obj::import(builder, input, path, bytes, read_file)?,
+        Format::Gltf => gltf::import(builder, input, path, bytes, read_file)?,
     }
     let report = builder.report_mut();
     let dropped = report.dropped_degenerate - dropped;

@@ -26,8 +26,15 @@ const KEYWORDS: &[&str] = &[
     "lod", "shadow_obj", "trace_obj", "maplib", "usemap", "call", "csh",
 ];
 
-/// Imports the OBJ text `bytes` (read from `path`) as input `input`.
-pub(super) fn import(builder: &mut SceneBuilder, input: u32, path: &Path, bytes: &[u8]) -> Result<(), ImportError> {
+/// Imports the OBJ text `bytes` (read from `path`) as input `input`; material libraries are
+/// fetched with `read_file`.
+pub(super) fn import(
+    builder: &mut SceneBuilder,
+    input: u32,
+    path: &Path,
+    bytes: &[u8],
+    read_file: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
+) -> Result<(), ImportError> {
     let err = |message: String| ImportError::Obj { path: path.to_path_buf(), message };
     if bytes.starts_with(b"glTF") {
         return Err(err("this is a binary glTF (GLB) file, not OBJ text: give it the .glb extension".to_string()));
@@ -77,7 +84,7 @@ pub(super) fn import(builder: &mut SceneBuilder, input: u32, path: &Path, bytes:
     let (models, materials) =
         tobj::load_obj_buf(&mut std::io::Cursor::new(text.as_bytes()), &options, |library: &Path| {
             let file = base.join(library);
-            let loaded = match std::fs::read(&file) {
+            let loaded = match read_file(&file) {
                 Err(e) => Err(format!("cannot read it ({e})")),
                 Ok(b) => match std::str::from_utf8(&b) {
                     Err(_) => Err("it is not UTF-8 text".to_string()),
