@@ -9,8 +9,9 @@
 use std::path::Path;
 use vlf_bake::{BakeConfig, DepthPolicy, NoProgress, import};
 use vlf_geom::BruteForce;
+use vlf_geom::Intersector;
 use vlf_kdtree::{KdParams, KdTree};
-use vlf_render::{Frame, Light, Scene, SceneOptions, Settings, Tracer, View, default_lights, render};
+use vlf_render::{Frame, Light, Scene, SceneOptions, Settings, View, default_lights, render};
 use vlf_runtime::Field;
 use vlf_tests::fixtures;
 
@@ -41,7 +42,7 @@ fn obj_view() -> View {
     View::look_at([0.0, 12.0, 48.0], [0.0, 12.0, 0.0], [0.0, 1.0, 0.0], 37.8, WIDTH as f64 / HEIGHT as f64)
 }
 
-fn frame(tracer: &(impl Tracer + ?Sized), scene: &Scene, view: &View, lights: &[Light]) -> Frame {
+fn frame(tracer: &(impl Intersector + ?Sized), scene: &Scene, view: &View, lights: &[Light]) -> Frame {
     render(tracer, scene, view, lights, &settings(), &|_| {})
 }
 

@@ -1,53 +1,76 @@
 //! Geometry shared by the VLF baker, the runtime and the baselines: rays and hits
-//! ([`ray`]), the watertight triangle test ([`triangle`]), the octahedral direction lattice with
+//! ([`ray`]), the watertight triangle test ([`triangle`]) and the leaf kernel that every
+//! acceleration path tests triangles with ([`kernel`]), the octahedral direction lattice with
 //! its constant-time lookup ([`lattice`]), the per-direction frames ([`frame`]), a pinhole camera
 //! ([`camera`]) and the brute-force reference intersector ([`BruteForce`]).
 //!
 //! No I/O, no allocation on query paths, no dependency on the file format.
 
 #![deny(missing_docs)]
+#![forbid(unsafe_code)]
 
 pub mod camera;
 pub mod frame;
+pub mod kernel;
 pub mod lattice;
 pub mod ray;
 pub mod triangle;
 
 pub use camera::Camera;
+pub use kernel::{Closest, Triangles};
 pub use lattice::Lattice;
 pub use ray::{Counter, Hit, Intersector, Ray, TraceStats};
 pub use triangle::{TriHit, TriRay, is_degenerate};
 
-/// The reference intersector: every triangle, every ray, with the same watertight kernel as the
-/// accelerated paths. Slow on purpose; the baseline every fast path is tested against.
+/// The reference intersector: every triangle, every ray, in id order, with the same leaf kernel
+/// as the accelerated paths. Slow on purpose; the baseline every fast path is tested against.
 pub struct BruteForce<'a> {
     /// The triangles; a hit's `prim` is an index into this slice.
     pub triangles: &'a [[[f32; 3]; 3]],
 }
 
-impl Intersector for BruteForce<'_> {
-    fn closest_hit(&self, ray: &Ray) -> Option<Hit> {
+impl BruteForce<'_> {
+    /// Every id in order. (At most 2³² − 1 triangles, as in a field.)
+    fn ids(&self) -> std::ops::Range<u32> {
+        0..self.triangles.len() as u32
+    }
+
+    /// The closest hit, counting into `counter`.
+    pub fn closest_hit_with(&self, ray: &Ray, counter: &mut impl Counter) -> Option<Hit> {
         if !ray.is_valid() {
             return None;
         }
-        let tr = TriRay::new(ray);
-        let mut best: Option<Hit> = None;
-        let mut tmax = ray.tmax;
-        for (i, t) in self.triangles.iter().enumerate() {
-            if let Some(h) = tr.intersect(t[0], t[1], t[2], tmax) {
-                tmax = h.t;
-                best = Some(Hit { t: h.t, prim: i as u32, u: h.u, v: h.v });
-            }
+        counter.ray();
+        let mut best = Closest::new(ray.tmax);
+        TriRay::new(ray).closest_in(self.triangles, self.ids(), &mut best, counter);
+        best.hit
+    }
+
+    /// The first hit in id order, counting into `counter`.
+    pub fn any_hit_with(&self, ray: &Ray, counter: &mut impl Counter) -> Option<Hit> {
+        if !ray.is_valid() {
+            return None;
         }
-        best
+        counter.ray();
+        TriRay::new(ray).any_in(self.triangles, self.ids(), ray.tmax, counter)
+    }
+}
+
+impl Intersector for BruteForce<'_> {
+    fn closest_hit(&self, ray: &Ray) -> Option<Hit> {
+        self.closest_hit_with(ray, &mut ())
     }
 
     fn any_hit(&self, ray: &Ray) -> bool {
-        if !ray.is_valid() {
-            return false;
-        }
-        let tr = TriRay::new(ray);
-        self.triangles.iter().any(|t| tr.intersect(t[0], t[1], t[2], ray.tmax).is_some())
+        self.any_hit_with(ray, &mut ()).is_some()
+    }
+
+    fn closest_hit_counted(&self, ray: &Ray, work: &mut TraceStats) -> Option<Hit> {
+        self.closest_hit_with(ray, work)
+    }
+
+    fn any_hit_counted(&self, ray: &Ray, work: &mut TraceStats) -> Option<Hit> {
+        self.any_hit_with(ray, work)
     }
 }
 

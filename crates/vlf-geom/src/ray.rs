@@ -71,12 +71,17 @@ impl Hit {
 }
 
 /// Something that answers ray queries: the field, the kd-tree baseline and the brute-force
-/// reference all implement it, so tests and benchmarks treat them alike.
+/// reference all implement it, so tests, benchmarks and the renderer treat them alike.
 pub trait Intersector: Sync {
     /// The closest hit in `[tmin, tmax]`, if any.
     fn closest_hit(&self, ray: &Ray) -> Option<Hit>;
     /// Whether anything is hit in `[tmin, tmax]` (shadow rays).
     fn any_hit(&self, ray: &Ray) -> bool;
+    /// [`Self::closest_hit`], adding the work done to `work`.
+    fn closest_hit_counted(&self, ray: &Ray, work: &mut TraceStats) -> Option<Hit>;
+    /// The first hit found in `[tmin, tmax]` (not necessarily the closest), adding the work done
+    /// to `work`: [`Self::any_hit`] with the hit it found.
+    fn any_hit_counted(&self, ray: &Ray, work: &mut TraceStats) -> Option<Hit>;
 }
 
 /// Counters of the work traversals did, shared by every acceleration structure so benchmarks

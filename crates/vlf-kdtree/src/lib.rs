@@ -25,8 +25,8 @@
 
 mod build;
 
+use vlf_geom::{Closest, Hit, Intersector, Ray, TriRay};
 pub use vlf_geom::{Counter, TraceStats};
-use vlf_geom::{Hit, Intersector, Ray, TriRay};
 
 /// The deepest tree the build makes, whatever [`KdParams::max_depth`] asks for; it bounds the
 /// traversal stack.
@@ -234,6 +234,12 @@ impl KdTree {
         self.trace::<true, _>(ray, stats)
     }
 
+    /// `hit` with its `prim` turned from an index into the tree's triangles into the caller's id.
+    #[inline(always)]
+    fn original(&self, hit: Hit) -> Hit {
+        Hit { prim: self.prims[hit.prim as usize], ..hit }
+    }
+
     /// The traversal, generic over what it counts and over whether the first hit ends it.
     #[inline(always)]
     fn trace<const ANY: bool, C: Counter>(&self, ray: &Ray, counter: &mut C) -> Option<Hit> {
@@ -267,8 +273,8 @@ impl KdTree {
         counter.ray();
 
         let tri_ray = TriRay::new(ray);
-        let mut best: Option<Hit> = None;
-        let mut tmax = ray.tmax;
+        let tris = &self.triangles[..];
+        let mut best = Closest::new(ray.tmax);
         let mut stack = [Entry { node: 0, t0: 0.0, t1: 0.0 }; MAX_DEPTH as usize];
         let mut sp = 0usize;
         let mut node = 0usize;
@@ -298,24 +304,17 @@ impl KdTree {
             }
 
             counter.leaf();
-            for &i in &self.references[n.references()] {
-                counter.test();
-                let t = &self.triangles[i as usize];
-                if let Some(h) = tri_ray.intersect(t[0], t[1], t[2], tmax) {
-                    let hit = Hit { t: h.t, prim: self.prims[i as usize], u: h.u, v: h.v };
-                    if ANY {
-                        return Some(hit);
-                    }
-                    tmax = h.t;
-                    best = Some(hit);
+            let ids = self.references[n.references()].iter().copied();
+            if ANY {
+                if let Some(hit) = tri_ray.any_in(tris, ids, ray.tmax, counter) {
+                    return Some(self.original(hit));
                 }
+            } else {
+                tri_ray.closest_in(tris, ids, &mut best, counter);
             }
             // Final once the best hit lies within the part of the ray already searched.
-            if best.is_some() && tmax as f64 <= t1 {
-                return best;
-            }
-            if sp == 0 {
-                return best;
+            if (best.hit.is_some() && best.tmax as f64 <= t1) || sp == 0 {
+                return best.hit.map(|hit| self.original(hit));
             }
             sp -= 1;
             let e = stack[sp];
@@ -335,6 +334,16 @@ impl Intersector for KdTree {
     #[inline]
     fn any_hit(&self, ray: &Ray) -> bool {
         KdTree::any_hit(self, ray)
+    }
+
+    #[inline]
+    fn closest_hit_counted(&self, ray: &Ray, work: &mut TraceStats) -> Option<Hit> {
+        KdTree::closest_hit_counted(self, ray, work)
+    }
+
+    #[inline]
+    fn any_hit_counted(&self, ray: &Ray, work: &mut TraceStats) -> Option<Hit> {
+        KdTree::any_hit_counted(self, ray, work)
     }
 }
 

@@ -8,8 +8,9 @@
 //! - [`Light`]: point, spot and directional lights: the field's glTF lights, or
 //!   [`default_lights`] around the camera;
 //! - [`render`]: primary rays, shadow rays through any-hit queries, mirror reflection and
-//!   refraction to a depth limit, Lambert and Phong shading, on all cores, over any [`Tracer`]
-//!   (the field, the kd-tree baseline, brute force), counting the work per pixel;
+//!   refraction to a depth limit, Lambert and Phong shading, on all cores, over any
+//!   [`vlf_geom::Intersector`] (the field, the kd-tree baseline, brute force), counting the work
+//!   per pixel;
 //! - [`to_srgb8`], [`work_image`] and [`encode_png`]: the picture, a false-colour picture of where
 //!   the work went, and PNG bytes.
 //!
@@ -31,12 +32,13 @@
 //!
 //! Textures are out of scope: a field's materials are constant colours.
 
+#![forbid(unsafe_code)]
+
 mod image;
 mod light;
 mod math;
 mod render;
 mod scene;
-mod tracer;
 mod view;
 
 pub use image::{WorkImage, WorkMetric, decode_png, encode_png, inferno, to_srgb8, work_image};
@@ -44,5 +46,4 @@ pub use light::{Emitter, Light, default_lights};
 pub use math::V3;
 pub use render::{Background, Frame, MAX_BOUNCES, RayCounts, Settings, render};
 pub use scene::{Scene, SceneOptions, Surface};
-pub use tracer::Tracer;
 pub use view::View;

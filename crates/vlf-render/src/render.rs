@@ -11,10 +11,9 @@
 use crate::light::Light;
 use crate::math::{V3, add, dot, madd, max_component, mul, normalize, reflect, scale, widen};
 use crate::scene::Scene;
-use crate::tracer::Tracer;
 use crate::view::View;
 use rayon::prelude::*;
-use vlf_geom::{Ray, TraceStats};
+use vlf_geom::{Intersector, Ray, TraceStats};
 
 /// What is seen where rays leave the scene.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -111,7 +110,7 @@ enum Kind {
 }
 
 /// One pixel's tracing: the scene, and the counters its rays add to.
-struct Tracing<'a, T: Tracer + ?Sized> {
+struct Tracing<'a, T: Intersector + ?Sized> {
     tracer: &'a T,
     scene: &'a Scene,
     lights: &'a [Light],
@@ -121,7 +120,7 @@ struct Tracing<'a, T: Tracer + ?Sized> {
     rays: RayCounts,
 }
 
-impl<T: Tracer + ?Sized> Tracing<'_, T> {
+impl<T: Intersector + ?Sized> Tracing<'_, T> {
     /// The light arriving along `ray` (whose unit direction in f64 is `dir`).
     fn radiance(&mut self, ray: &Ray, dir: V3, depth: u32, weight: V3, kind: Kind) -> V3 {
         match kind {
@@ -129,7 +128,7 @@ impl<T: Tracer + ?Sized> Tracing<'_, T> {
             Kind::Reflection => self.rays.reflection += 1,
             Kind::Refraction => self.rays.refraction += 1,
         }
-        let Some(hit) = self.tracer.closest_hit(ray, &mut self.work) else {
+        let Some(hit) = self.tracer.closest_hit_counted(ray, &mut self.work) else {
             return self.settings.background.colour(dir);
         };
         let Some(sp) = self.scene.surface_point(hit.prim, hit.u, hit.v) else {
@@ -160,7 +159,7 @@ impl<T: Tracer + ?Sized> Tracing<'_, T> {
                 (inc.distance - 2.0 * self.epsilon) as f32,
             );
             self.rays.shadow += 1;
-            if self.tracer.any_hit(&shadow, &mut self.work) {
+            if self.tracer.any_hit_counted(&shadow, &mut self.work).is_some() {
                 continue;
             }
             let highlight = dot(reflect(scale(inc.to_light, -1.0), n), view).max(0.0).powf(s.shininess);
@@ -235,7 +234,7 @@ fn refract(d: V3, n: V3, eta: f64) -> Option<(V3, f64, f64)> {
 /// Renders a frame of `scene` seen through `view` under `lights`, tracing with `tracer` on all of
 /// rayon's threads (the global pool, or one installed around the call). `progress(rows)` is
 /// called as rows finish.
-pub fn render<T: Tracer + ?Sized>(
+pub fn render<T: Intersector + ?Sized>(
     tracer: &T,
     scene: &Scene,
     view: &View,

@@ -502,6 +502,27 @@ impl Intersector for Field {
     fn any_hit(&self, ray: &Ray) -> bool {
         Field::any_hit(self, ray)
     }
+    fn closest_hit_counted(&self, ray: &Ray, work: &mut TraceStats) -> Option<Hit> {
+        self.view().closest_hit_counted(ray, work)
+    }
+    fn any_hit_counted(&self, ray: &Ray, work: &mut TraceStats) -> Option<Hit> {
+        self.view().any_hit_counted(ray, work)
+    }
+}
+
+impl Intersector for FieldView<'_> {
+    fn closest_hit(&self, ray: &Ray) -> Option<Hit> {
+        FieldView::closest_hit(self, ray)
+    }
+    fn any_hit(&self, ray: &Ray) -> bool {
+        FieldView::any_hit(self, ray)
+    }
+    fn closest_hit_counted(&self, ray: &Ray, work: &mut TraceStats) -> Option<Hit> {
+        FieldView::closest_hit_counted(self, ray, work)
+    }
+    fn any_hit_counted(&self, ray: &Ray, work: &mut TraceStats) -> Option<Hit> {
+        FieldView::any_hit_counted(self, ray, work)
+    }
 }
 
 impl OpenError {

@@ -18,10 +18,26 @@
 // the reject branch.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
-use vlf_format::{BeamRecord, FieldReader, LOOKUP_FLIP, LOOKUP_NONE, MAX_DEPTH, TileRecord, Z_LEVELS};
+use vlf_format::{BeamRecord, FieldReader, LOOKUP_FLIP, LOOKUP_NONE, MAX_DEPTH, TileRecord, TriangleRecord, Z_LEVELS};
 use vlf_geom::frame::mul;
 use vlf_geom::lattice::candidates;
-use vlf_geom::{Counter, Hit, Ray, TriRay};
+use vlf_geom::{Closest, Counter, Hit, Ray, TriRay, Triangles};
+
+/// The field's TRIANGLES section as the leaf kernel reads it.
+struct FieldTriangles<'a>(&'a [TriangleRecord]);
+
+impl Triangles for FieldTriangles<'_> {
+    #[inline(always)]
+    fn vertices(&self, id: u32) -> Option<[[f32; 3]; 3]> {
+        let t = self.0.get(id as usize)?;
+        Some([t.vertex(0), t.vertex(1), t.vertex(2)])
+    }
+
+    #[inline(always)]
+    fn count(&self) -> usize {
+        self.0.len()
+    }
+}
 
 /// The validated field plus the constants every query needs, derived once at open.
 #[derive(Clone, Copy, Debug)]
@@ -150,21 +166,14 @@ impl<'a> FieldView<'a> {
         let setup = self.setup(ray)?;
         counter.ray();
         let tri_ray = TriRay::new(ray);
-        let mut best: Option<Hit> = None;
-        let mut tmax = ray.tmax;
+        let tris = FieldTriangles(self.reader.triangles);
+        let mut best = Closest::new(ray.tmax);
         self.walk(&setup, counter, |ids, exit_t, counter| {
-            for &id in ids {
-                let Some(tri) = self.reader.triangles.get(id as usize) else { continue };
-                counter.test();
-                if let Some(h) = tri_ray.intersect(tri.vertex(0), tri.vertex(1), tri.vertex(2), tmax) {
-                    tmax = h.t;
-                    best = Some(Hit { t: h.t, prim: id, u: h.u, v: h.v });
-                }
-            }
+            tri_ray.closest_in(&tris, ids.iter().copied(), &mut best, counter);
             // Final once the best hit lies within the part of the ray already searched.
-            if best.is_some() && (tmax as f64) <= exit_t { Visit::Done } else { Visit::Continue }
+            if best.hit.is_some() && (best.tmax as f64) <= exit_t { Visit::Done } else { Visit::Continue }
         });
-        best
+        best.hit
     }
 
     /// Whether anything is hit on `[tmin, tmax]`; the first hit found ends the search:
@@ -179,17 +188,11 @@ impl<'a> FieldView<'a> {
         let setup = self.setup(ray)?;
         counter.ray();
         let tri_ray = TriRay::new(ray);
+        let tris = FieldTriangles(self.reader.triangles);
         let mut found = None;
         self.walk(&setup, counter, |ids, _, counter| {
-            for &id in ids {
-                let Some(tri) = self.reader.triangles.get(id as usize) else { continue };
-                counter.test();
-                if let Some(h) = tri_ray.intersect(tri.vertex(0), tri.vertex(1), tri.vertex(2), ray.tmax) {
-                    found = Some(Hit { t: h.t, prim: id, u: h.u, v: h.v });
-                    return Visit::Done;
-                }
-            }
-            Visit::Continue
+            found = tri_ray.any_in(&tris, ids.iter().copied(), ray.tmax, counter);
+            if found.is_some() { Visit::Done } else { Visit::Continue }
         });
         found
     }
