@@ -36,6 +36,7 @@ mod light;
 mod math;
 mod render;
 mod scene;
+pub mod setup;
 mod tracer;
 mod view;
 
