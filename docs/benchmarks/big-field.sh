@@ -95,7 +95,7 @@ traced() { python3 -c "import json,sys; d=json.load(open(sys.argv[1])); print(f\
   echo
   echo "The same scene and tiles, more directions: the field grows 16-fold, the bake's peak memory"
   echo "does not. Directions are baked in chunks of about 64 MiB of output and written as they finish"
-  echo "(\`crates/vlf-bake/src/bake.rs\`), so peak memory is the scene, one chunk per thread and the"
+  echo "(\`crates/vlf-bake/src/writer.rs\`), so peak memory is the scene, one chunk per thread and the"
   echo "channel of finished chunks, whatever the number of directions."
   echo
   echo "| triangles | parameters | field | bake s | peak RSS | RSS / field |"

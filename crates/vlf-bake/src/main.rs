@@ -584,7 +584,7 @@ fn bake(a: &BakeArgs) -> Result<()> {
         cache_note,
         on_choice: (!a.quiet && !a.json).then_some(&explain as &dyn Fn(&vlf_bake::Choice)),
     };
-    let out = vlf_bake::job::bake(&job, &bar)?;
+    let out = vlf_bake::job::run_bake_job(&job, &bar)?;
     if !a.quiet {
         for w in out.import.warnings.iter().chain(&out.warnings) {
             eprintln!("warning: {w}");
@@ -644,7 +644,7 @@ fn bake(a: &BakeArgs) -> Result<()> {
 fn merge(a: &MergeArgs) -> Result<()> {
     let (cache, cache_note) = a.cache.resolve(a.quiet);
     let bar = Bar::new(a.quiet || a.json);
-    let out = vlf_bake::job::merge_job(&a.parts, &a.output, cache, cache_note, &bar)?;
+    let out = vlf_bake::job::run_merge_job(&a.parts, &a.output, cache, cache_note, &bar)?;
     if !a.quiet {
         for w in &out.warnings {
             eprintln!("warning: {w}");
@@ -985,7 +985,7 @@ fn trace(a: &TraceArgs) -> Result<()> {
         field.par_closest_hits(&rays, &mut hits);
     }
     let seconds = start.elapsed().as_secs_f64();
-    vlf_bake::bake::write_atomically(&a.out, |w| w.write_all(bytemuck::cast_slice(&hits)))
+    vlf_bake::atomic::write_atomically(&a.out, |w| w.write_all(bytemuck::cast_slice(&hits)))
         .with_context(|| format!("cannot write hits file {}", a.out.display()))?;
     let hit_count = hits.iter().filter(|h| h.prim != u32::MAX).count();
     let invalid = rays.iter().filter(|r| !r.is_valid()).count();
@@ -1021,7 +1021,7 @@ fn rays(a: &RaysArgs) -> Result<()> {
         View::Inside => vlf_geom::Camera::inside(center, radius, aspect),
     };
     let rays = camera.primary_rays(a.width, a.height);
-    vlf_bake::bake::write_atomically(&a.output, |w| w.write_all(bytemuck::cast_slice(&rays)))
+    vlf_bake::atomic::write_atomically(&a.output, |w| w.write_all(bytemuck::cast_slice(&rays)))
         .with_context(|| format!("cannot write rays file {}", a.output.display()))?;
     Ok(())
 }
@@ -1166,7 +1166,7 @@ fn render(a: &RenderArgs) -> Result<()> {
     bar.end();
 
     let png = vlf_render::encode_png(frame.width, frame.height, &vlf_render::to_srgb8(&frame, a.exposure))?;
-    vlf_bake::bake::write_atomically(&a.output, |w| w.write_all(&png))
+    vlf_bake::atomic::write_atomically(&a.output, |w| w.write_all(&png))
         .with_context(|| format!("cannot write {}", a.output.display()))?;
     let work_image = match &a.work_image {
         None => None,
@@ -1179,7 +1179,7 @@ fn render(a: &RenderArgs) -> Result<()> {
             };
             let image = vlf_render::work_image(&frame, metric, a.work_max);
             let png = vlf_render::encode_png(frame.width, frame.height, &image.rgb)?;
-            vlf_bake::bake::write_atomically(path, |w| w.write_all(&png))
+            vlf_bake::atomic::write_atomically(path, |w| w.write_all(&png))
                 .with_context(|| format!("cannot write {}", path.display()))?;
             Some(WorkImageSummary {
                 path: path.clone(),
@@ -1261,7 +1261,7 @@ fn gen_scene(a: &GenArgs) -> Result<()> {
         SceneKind::Grid => ("grid", generate::grid(a.count as u32, 4, 1.0)),
         SceneKind::Slivers => ("slivers", generate::slivers(a.count, a.seed)),
     };
-    vlf_bake::bake::write_atomically(&a.output, |w| generate::write_obj(w, name, &tris))
+    vlf_bake::atomic::write_atomically(&a.output, |w| generate::write_obj(w, name, &tris))
         .with_context(|| format!("cannot write {}", a.output.display()))?;
     Ok(())
 }

@@ -5,12 +5,16 @@
 //! small (finer tiles need more directions, `docs/architecture.md`), and take the finest rung
 //! whose estimated size fits the budget, the smaller of `--max-bytes` and
 //! `--max-bytes-per-triangle` × the triangle count, stopping early once tiles are already nearly
-//! singular (more resolution then buys little speed for much memory). The estimate bakes a few sample directions for real, so it
-//! accounts for the scene's actual shape.
+//! singular (more resolution then buys little speed for much memory). The estimate bakes a few
+//! sample directions for real, so it accounts for the scene's actual shape; this module asks for
+//! those samples through [`Measure`], which the prepared scene implements
+//! (`crate::estimate`), so that the policy here depends on nothing else in the crate.
 
-use crate::bake::{BakeError, Prepared, sample_direction_bytes};
-use vlf_format::{MAX_DEPTH, Request};
+use vlf_format::{MAX_DEPTH, Request, StatisticsRecord, size};
 use vlf_geom::Lattice;
+
+/// The conservative margin as a fraction of the bounding radius (`formats/vlf.md` §6.2).
+pub const MARGIN_FRACTION: f64 = 1.0 / (1u64 << 20) as f64;
 
 /// The default size budget for automatic parameters: 4 GiB.
 pub const DEFAULT_MAX_BYTES: u64 = 4 << 30;
@@ -42,6 +46,17 @@ pub const LADDER: [(u32, u32); 9] =
 pub struct DepthPolicy {
     pub leaf_size: u32,
     pub max_depth: u32,
+}
+
+impl DepthPolicy {
+    /// The depth of a tile with `m` distinct triangles (`formats/vlf.md` §6.3).
+    pub fn depth_for(&self, m: u64) -> u32 {
+        let mut depth = 0;
+        while depth < self.max_depth && (self.leaf_size as u64) << depth < m {
+            depth += 1;
+        }
+        depth
+    }
 }
 
 impl Default for DepthPolicy {
@@ -78,31 +93,31 @@ impl Default for BakeConfig {
 
 impl BakeConfig {
     /// Checks ranges; the CLI calls it so bad flags fail before any work.
-    pub fn validate(&self) -> Result<(), BakeError> {
-        let bad = |m: String| Err(BakeError::Params(m));
+    pub fn validate(&self) -> Result<(), ParamsError> {
         if let Some(l) = self.directions {
             if !(3..=33_554_433).contains(&l) {
-                return bad(format!("--directions {l} is outside 3..=33554433 (a lattice of N = 1..=4096)"));
+                return Err(ParamsError::Directions(l));
             }
         }
         if let Some(n) = self.tiles {
             if !(1..=65536).contains(&n) {
-                return bad(format!("--tiles {n} is outside 1..=65536"));
+                return Err(ParamsError::Tiles(n));
             }
         }
         if self.depth.leaf_size == 0 {
-            return bad("--leaf-size must be at least 1".into());
+            return Err(ParamsError::LeafSize);
         }
         if self.depth.max_depth > MAX_DEPTH {
-            return bad(format!("--max-depth {} exceeds the format's limit of {MAX_DEPTH}", self.depth.max_depth));
+            return Err(ParamsError::MaxDepth(self.depth.max_depth));
         }
         if self.max_bytes == 0 || self.max_bytes_per_triangle == 0 {
-            return bad("--max-bytes and --max-bytes-per-triangle must be positive".into());
+            return Err(ParamsError::Budget);
         }
         Ok(())
     }
 
-    /// The request recorded in the file and hashed into the input hash.
+    /// The request recorded in the file and hashed into the input hash: `None` ("choose for me")
+    /// is encoded as 0 (`formats/vlf.md` §3.3; [`Request::requested_directions`] decodes it).
     pub fn request(&self) -> Request {
         Request {
             requested_directions: self.directions.unwrap_or(0),
@@ -134,31 +149,97 @@ pub struct Choice {
     pub reason: String,
 }
 
-/// A lower bound on a field's size: every tile costs a record and a bound, every triangle lands in
-/// at least one tile per direction, plus the fixed sections.
+/// Why parameters cannot be chosen: a flag out of range, or a budget nothing fits. The messages
+/// name the flags, for the command line to print as they are.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum ParamsError {
+    #[error("--directions {0} is outside 3..=33554433 (a lattice of N = 1..=4096)")]
+    Directions(u32),
+    #[error("--tiles {0} is outside 1..=65536")]
+    Tiles(u32),
+    #[error("--leaf-size must be at least 1")]
+    LeafSize,
+    #[error("--max-depth {0} exceeds the format's limit of {max}", max = MAX_DEPTH)]
+    MaxDepth(u32),
+    #[error("--max-bytes and --max-bytes-per-triangle must be positive")]
+    Budget,
+    /// Explicit parameters whose field cannot fit `--max-bytes`, whatever the scene's shape.
+    #[error(
+        "{directions} directions × {tiles}² tiles need at least {} for {triangles} triangles, over the --max-bytes budget of {}",
+        human_bytes(*.at_least),
+        human_bytes(*.budget)
+    )]
+    ExplicitOverBudget { directions: u64, tiles: u32, triangles: u64, at_least: u64, budget: u64 },
+    /// Not even the coarsest rung of the automatic search fits the budget.
+    #[error(
+        "even the coarsest field ({directions} directions × {tiles}² tiles) does not fit the budget of {} for {triangles} triangles \
+         (--max-bytes {}, --max-bytes-per-triangle {}); raise them or give --directions and --tiles",
+        human_bytes(*.budget),
+        human_bytes(*.max_bytes),
+        human_bytes(*.max_bytes_per_triangle)
+    )]
+    NothingFits {
+        directions: u64,
+        tiles: u32,
+        triangles: u64,
+        budget: u64,
+        max_bytes: u64,
+        max_bytes_per_triangle: u64,
+    },
+}
+
+/// What baking a few sample directions of a candidate measured.
+#[derive(Clone, Copy, Debug)]
+pub struct Sample {
+    /// The mean bytes a direction adds to the file.
+    pub bytes_per_direction: u64,
+    /// The sample directions' statistics, summed.
+    pub statistics: StatisticsRecord,
+}
+
+/// What choosing parameters needs of a scene: its size, and what a candidate's directions cost,
+/// measured on a few of them. The prepared scene answers by baking them (`crate::estimate`); tests
+/// answer with a model.
+pub trait Measure {
+    /// What measuring can fail with; parameter errors convert into it.
+    type Error: From<ParamsError>;
+    /// The triangles of the scene.
+    fn triangle_count(&self) -> u64;
+    /// The radius of the scene's bounding sphere, in world units.
+    fn radius(&self) -> f64;
+    /// Measures `directions` sample directions of a field with `params`.
+    fn sample(&self, params: &Params, directions: usize) -> Result<Sample, Self::Error>;
+}
+
+/// A lower bound on a field's size (`vlf_format::size::lower_bound`): every tile costs a record
+/// and a bound, every triangle lands in at least one tile per direction, plus the fixed sections.
 pub fn lower_bound_bytes(triangles: u64, lattice_n: u32, tiles: u32) -> u64 {
     let l = Lattice::new(lattice_n).direction_count();
-    let n2 = tiles as u64 * tiles as u64;
-    l * (16 * n2 + 4 * triangles + 32 + 16 + 72) + 56 * triangles
+    size::lower_bound(l, tiles as u64 * tiles as u64, triangles)
 }
 
-fn params_for(prep: &Prepared<'_>, lattice_n: u32, tiles: u32, depth: DepthPolicy) -> Params {
-    Params { lattice_n, tiles, depth, margin: prep.radius * crate::bake::MARGIN_FRACTION }
+fn params_for(radius: f64, lattice_n: u32, tiles: u32, depth: DepthPolicy) -> Params {
+    Params { lattice_n, tiles, depth, margin: radius * MARGIN_FRACTION }
 }
 
-/// Estimated size of a field: sample directions baked for real, scaled to all directions.
-fn estimate(prep: &Prepared<'_>, p: &Params) -> Result<(u64, f64), BakeError> {
-    let (per_direction, stats) = sample_direction_bytes(prep, p, SAMPLE_DIRECTIONS)?;
+/// Estimated size of a field: sample directions measured, scaled to all directions; and the mean
+/// triangles per non-empty tile of the sample.
+fn estimate<M: Measure>(scene: &M, p: &Params) -> Result<(u64, f64), M::Error> {
+    let sample = scene.sample(p, SAMPLE_DIRECTIONS)?;
+    let stats = &sample.statistics;
     let l = Lattice::new(p.lattice_n).direction_count();
-    let fixed = 56 * prep.triangle_count() as u64 + 64 * 16;
     let nonempty = (stats.tile_count - stats.empty_tiles).max(1);
-    Ok((l * per_direction + fixed, stats.tile_triangle_sum as f64 / nonempty as f64))
+    Ok((
+        size::estimate(l, sample.bytes_per_direction, scene.triangle_count()),
+        stats.tile_triangle_sum as f64 / nonempty as f64,
+    ))
 }
 
-/// Chooses the parameters for `config` on the prepared scene.
-pub fn choose(prep: &Prepared<'_>, config: &BakeConfig) -> Result<Choice, BakeError> {
+/// Chooses the parameters for `config` on a scene (for a bake, the prepared scene).
+pub fn choose<M: Measure>(scene: &M, config: &BakeConfig) -> Result<Choice, M::Error> {
     config.validate()?;
-    let tris = prep.triangle_count() as u64;
+    let tris = scene.triangle_count();
     // Explicit parameters are held to the absolute budget only; automatic ones also to the
     // per-triangle allowance.
     let budget = config.max_bytes;
@@ -167,15 +248,17 @@ pub fn choose(prep: &Prepared<'_>, config: &BakeConfig) -> Result<Choice, BakeEr
     if let (Some(lattice_n), Some(tiles)) = (explicit_n, config.tiles) {
         let lb = lower_bound_bytes(tris, lattice_n, tiles);
         if lb > budget {
-            return Err(BakeError::Params(format!(
-                "{} directions × {tiles}² tiles need at least {} for {tris} triangles, over the --max-bytes budget of {}",
-                Lattice::new(lattice_n).direction_count(),
-                human_bytes(lb),
-                human_bytes(budget)
-            )));
+            return Err(ParamsError::ExplicitOverBudget {
+                directions: Lattice::new(lattice_n).direction_count(),
+                tiles,
+                triangles: tris,
+                at_least: lb,
+                budget,
+            }
+            .into());
         }
         return Ok(Choice {
-            params: params_for(prep, lattice_n, tiles, config.depth),
+            params: params_for(scene.radius(), lattice_n, tiles, config.depth),
             automatic: false,
             estimated_bytes: None,
             reason: "as requested".into(),
@@ -205,8 +288,8 @@ pub fn choose(prep: &Prepared<'_>, config: &BakeConfig) -> Result<Choice, BakeEr
         if lower_bound_bytes(tris, lattice_n, tiles) > auto_budget {
             break;
         }
-        let p = params_for(prep, lattice_n, tiles, config.depth);
-        let (bytes, load) = estimate(prep, &p)?;
+        let p = params_for(scene.radius(), lattice_n, tiles, config.depth);
+        let (bytes, load) = estimate(scene, &p)?;
         if bytes > auto_budget {
             break;
         }
@@ -217,14 +300,15 @@ pub fn choose(prep: &Prepared<'_>, config: &BakeConfig) -> Result<Choice, BakeEr
     }
     let Some((params, bytes, load)) = chosen else {
         let (ln, t) = rungs[0];
-        return Err(BakeError::Params(format!(
-            "even the coarsest field ({} directions × {t}² tiles) does not fit the budget of {} for {tris} triangles \
-             (--max-bytes {}, --max-bytes-per-triangle {}); raise them or give --directions and --tiles",
-            Lattice::new(ln).direction_count(),
-            human_bytes(auto_budget),
-            human_bytes(budget),
-            human_bytes(config.max_bytes_per_triangle)
-        )));
+        return Err(ParamsError::NothingFits {
+            directions: Lattice::new(ln).direction_count(),
+            tiles: t,
+            triangles: tris,
+            budget: auto_budget,
+            max_bytes: budget,
+            max_bytes_per_triangle: config.max_bytes_per_triangle,
+        }
+        .into());
     };
     Ok(Choice {
         params,

@@ -1,5 +1,5 @@
 //! Sharded bakes (`formats/vlf-shard.md`): `bake --shard K/N` bakes the directions
-//! `⌊K·l/N⌋ .. ⌊(K+1)·l/N⌋` into a shard file ([`crate::bake::bake_into`]), and [`merge`] checks a
+//! `⌊K·l/N⌋ .. ⌊(K+1)·l/N⌋` into a shard file ([`crate::writer::write_into`]), and [`merge`] checks a
 //! set of shards and streams them into the field a single bake of the same inputs writes, byte
 //! for byte.
 //!
@@ -10,7 +10,10 @@
 //! shard is hashed and compared with its table on the way; the output is a temporary file renamed
 //! over the path only when everything checked out.
 
-use crate::bake::{AtomicFile, BAKER_REVISION, Progress, merge_stats};
+use crate::atomic::AtomicFile;
+use crate::progress::Progress;
+use crate::sections::BAKER_REVISION;
+use crate::statistics::merge_stats;
 use std::fmt;
 use std::fs::File;
 use std::io::{self, Write};
@@ -51,6 +54,14 @@ impl FromStr for ShardSpec {
             ));
         }
         Ok(ShardSpec { index, count })
+    }
+}
+
+impl ShardSpec {
+    /// The directions `⌊K·l/N⌋ .. ⌊(K+1)·l/N⌋` this shard holds of a field of `direction_count`
+    /// directions (`formats/vlf-shard.md` §2).
+    pub fn directions(&self, direction_count: u32) -> std::ops::Range<u32> {
+        shard_directions(self.index, self.count, direction_count)
     }
 }
 
@@ -314,11 +325,11 @@ impl ShardFile {
 
 /// The request a PARAMS record holds (`formats/vlf.md` §3.3), as text for messages.
 fn requested(p: &ParamsRecord) -> String {
-    let auto = |v: u32| if v == 0 { "automatic".to_string() } else { v.to_string() };
+    let auto = |v: Option<u32>| v.map_or("automatic".to_string(), |v| v.to_string());
     format!(
         "requested directions {}, tiles {}, leaf size {}, max depth {}, max bytes {}, max bytes per triangle {}",
-        auto(p.requested_directions),
-        auto(p.requested_tiles),
+        auto(p.requested_directions()),
+        auto(p.requested_tiles()),
         p.leaf_size,
         p.max_depth,
         p.max_bytes,
@@ -442,7 +453,7 @@ pub fn merge(parts: &[PathBuf], output: &Path, progress: &dyn Progress) -> Resul
     // Explicit parameters are held to --max-bytes (`bake` refuses such a field; each shard could
     // only check its own part).
     let p = &shards[0].params;
-    if p.requested_directions != 0 && p.requested_tiles != 0 && header.file_length > p.max_bytes {
+    if !p.is_automatic() && header.file_length > p.max_bytes {
         return Err(ShardError::OverBudget { length: header.file_length, ceiling: p.max_bytes });
     }
     tmp.commit().map_err(write_err)?;
@@ -537,7 +548,9 @@ fn write_merged(
             leaf = leaf.saturating_add(b.leaf_count).saturating_add(1);
             id = id.saturating_add(b.id_count);
         }
-        let covers = |count: u64, kind| count.checked_mul(4) == Some(s.entry(kind).raw_length);
+        let covers = |count: u64, kind: SectionKind| {
+            count.checked_mul(kind.element_size() as u64) == Some(s.entry(kind).raw_length)
+        };
         if !covers(leaf, SectionKind::LeafBounds) || !covers(id, SectionKind::TriangleIds) {
             return Err(s.corrupt("BEAMS do not cover LEAF_BOUNDS and TRIANGLE_IDS exactly".into()));
         }

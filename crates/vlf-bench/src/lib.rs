@@ -128,10 +128,10 @@ pub fn bake(scene: &Scene, config: &BakeConfig, work: &Path, name: &str) -> anyh
     let prep = Prepared::new(scene);
     let choice = match vlf_bake::choose(&prep, config) {
         Ok(c) => c,
-        Err(vlf_bake::BakeError::Params(why)) => return Ok(Err(Skipped::OverBudget(why))),
+        Err(vlf_bake::BakeError::Params(why)) => return Ok(Err(Skipped::OverBudget(why.to_string()))),
         Err(e) => return Err(e.into()),
     };
-    let summary = match vlf_bake::bake::bake_to_path(&prep, &choice, &config.request(), &path, &NoProgress) {
+    let summary = match vlf_bake::writer::write_field(&prep, &choice, &config.request(), &path, &NoProgress) {
         Ok(s) => s,
         Err(e @ vlf_bake::BakeError::OverBudget { .. }) => return Ok(Err(Skipped::OverBudget(e.to_string()))),
         Err(e) => return Err(e.into()),
