@@ -23,7 +23,8 @@ if ! need /usr/bin/time || ! need hyperfine; then
   apt-get install -y -q time hyperfine >/dev/null 2>&1 || { apt-get update -q >/dev/null && apt-get install -y -q time hyperfine >/dev/null; }
 fi
 
-cargo build --release -q -p vlf-bake -p vlf-runtime --example open
+cargo build --release -q --bin vlf-bake
+cargo build --release -q -p vlf-runtime --example open
 B=$PWD/target/release/vlf-bake
 OPEN=$PWD/target/release/examples/open
 BASE=${1:-/work/tmp-big}

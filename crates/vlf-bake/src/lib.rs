@@ -1,5 +1,6 @@
 //! Import triangle meshes (OBJ, glTF) and bake them into VLF visibility-field files
-//! (`formats/vlf.md`). The `vlf-bake` binary is a thin command line over this library.
+//! (`formats/vlf.md`). The `vlf-bake` command line (the `vlf-cli` package) is a thin layer over
+//! this library.
 //!
 //! ```no_run
 //! use vlf_bake::{BakeConfig, NoProgress, bake_scene, import::import_paths};
@@ -14,6 +15,7 @@
 //! and indexed triangles), [`params`] (the parameters, measured through [`estimate`]),
 //! [`sections`] (the shared sections and the input hash), [`writer`] (every direction through
 //! the [`direction`] kernel, written in order) and [`atomic`] (the rename into place).
+//! `docs/architecture.md` has the module map.
 
 #![forbid(unsafe_code)]
 

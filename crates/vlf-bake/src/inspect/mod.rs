@@ -1,5 +1,8 @@
 //! What `vlf-bake dump` shows: a description of a field read from its header, table and small
-//! sections only (instant on any size), and the full verification behind `--verify`.
+//! sections only (instant on any size), and the full verification behind `--verify`; [`text`]
+//! writes a description out as `dump` prints it.
+
+pub mod text;
 
 use crate::statistics::Statistics;
 use serde::Serialize;
