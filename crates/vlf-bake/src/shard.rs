@@ -582,3 +582,70 @@ fn write_merged(
     let (_, header) = f.finish(first.header.input_hash).map_err(write_err)?;
     Ok(header)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_shard_spec_is_k_of_n_counted_from_zero() {
+        assert_eq!("0/4".parse(), Ok(ShardSpec { index: 0, count: 4 }));
+        assert_eq!(" 3 / 4 ".parse(), Ok(ShardSpec { index: 3, count: 4 }));
+        assert_eq!("0/1".parse(), Ok(ShardSpec { index: 0, count: 1 }));
+        assert_eq!("65535/65536".parse(), Ok(ShardSpec { index: 65535, count: MAX_SHARDS }));
+        for text in ["0/4", "3/4", "12/65536"] {
+            assert_eq!(text.parse::<ShardSpec>().unwrap().to_string(), text);
+        }
+    }
+
+    #[test]
+    fn bad_shard_specs_are_refused_saying_why() {
+        for (text, says) in [
+            ("4/4", "shard index 4 in `4/4` must be below the count 4 (shards are 0..4)"),
+            ("7/3", "must be below the count 3"),
+            ("0/0", "shard count 0 in `0/0` is outside 1..=65536"),
+            ("0/65537", "shard count 65537 in `0/65537` is outside 1..=65536"),
+            ("1", "`1` is not a shard: write K/N, shard K (counted from 0) of N, e.g. 0/4 … 3/4"),
+            ("a/4", "`a/4` is not a shard"),
+            ("1/b", "`1/b` is not a shard"),
+            ("-1/4", "`-1/4` is not a shard"),
+            ("1/2/3", "`1/2/3` is not a shard"),
+            ("", "`` is not a shard"),
+        ] {
+            let e = text.parse::<ShardSpec>().unwrap_err();
+            assert!(e.contains(says), "`{text}`: {e}");
+        }
+    }
+
+    /// The shards of a split, parsed as `--shard` gives them, hold every direction exactly once, in
+    /// order, their sizes differing by at most one direction; with more shards than directions
+    /// some hold none.
+    #[test]
+    fn the_shards_of_a_split_cover_every_direction_exactly_once() {
+        for l in [1u32, 3, 9, 33, 129, 2049] {
+            for n in [1u32, 2, 3, 4, 5, 7, 64, 4096] {
+                let mut held = vec![0u32; l as usize];
+                let mut next = 0;
+                let mut sizes = Vec::new();
+                for k in 0..n {
+                    let spec: ShardSpec = format!("{k}/{n}").parse().unwrap();
+                    let range = spec.directions(l);
+                    assert_eq!(range.start, next, "shard {spec} of {l} directions does not follow the previous one");
+                    next = range.end;
+                    sizes.push(range.len());
+                    for j in range {
+                        held[j as usize] += 1;
+                    }
+                }
+                assert_eq!(next, l, "{n} shards of {l} directions end early");
+                assert!(held.iter().all(|&c| c == 1), "{n} shards of {l} directions: {held:?}");
+                let (min, max) = (sizes.iter().min().unwrap(), sizes.iter().max().unwrap());
+                assert!(max - min <= 1, "{n} shards of {l} directions: sizes {sizes:?}");
+                assert_eq!(*min == 0, n > l, "{n} shards of {l} directions: sizes {sizes:?}");
+            }
+        }
+        // 33 directions in 4 shards: ⌊33k/4⌋.
+        let ranges: Vec<_> = (0..4).map(|k| ShardSpec { index: k, count: 4 }.directions(33)).collect();
+        assert_eq!(ranges, [0..8, 8..16, 16..24, 24..33]);
+    }
+}
