@@ -2,13 +2,14 @@
 //! single-ray CRT kd-tree, both answering the same rays with the same triangle kernel in the same
 //! process, so a ratio measures the acceleration structures and nothing else.
 //!
-//! - [`figure3`]: frame time of a 512×512 image of unshaded primary rays against the number of
-//!   triangles, from outside and from inside, for CRT at its best depth and leaf size (a sweep, as
-//!   the paper did), and the field with linear tiles and with 1D-BSP tiles at 32², 64² and 128².
-//! - [`figure4`]: a walkthrough of the 16K scene, outside to inside: frame time and triangle tests
-//!   per frame for both.
-//! - [`parameters`]: frame time, field size and bake time against directions, tiles and the BSP
-//!   policy for the 100K scene.
+//! - [`experiments::figure3`]: frame time of a 512×512 image of unshaded primary rays against the
+//!   number of triangles, from outside and from inside, for CRT at its best depth and leaf size (a
+//!   sweep, as the paper did), and the field with linear tiles and with 1D-BSP tiles at 32², 64²
+//!   and 128².
+//! - [`experiments::figure4`]: a walkthrough of the 16K scene, outside to inside: frame time and
+//!   triangle tests per frame for both.
+//! - [`experiments::parameters`]: frame time, field size and bake time against directions, tiles
+//!   and the BSP policy for the 100K scene.
 //! - [`first_pixel`]: time to first pixel (open a field and trace one ray, in a new process) for
 //!   fields of any size, with the file in the page cache and evicted from it.
 //!
@@ -25,8 +26,6 @@ use std::time::Instant;
 use vlf_bake::{BakeConfig, NoProgress, Prepared, Scene};
 use vlf_geom::{Hit, Ray};
 use vlf_runtime::Field;
-
-pub use experiments::{figure3, figure4, parameters};
 
 /// Settings shared by all experiments.
 #[derive(Clone, Debug)]
