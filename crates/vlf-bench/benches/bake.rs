@@ -2,6 +2,8 @@
 //! conservatively, clip to tiles, build the 1D BSPs), reported as triangles per second per
 //! direction. `cargo bench -p vlf-bench --bench bake`.
 
+#![forbid(unsafe_code)]
+
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use std::hint::black_box;
 use vlf_bake::direction::{Scratch, build_direction};

@@ -16,7 +16,11 @@
 //! Frames are traced on one thread (the paper used one processor); every timing is the median of
 //! `repeats` runs after a warm-up run. Bakes use all cores.
 
+// Only `first_pixel` needs `unsafe`: it maps fields and asks the kernel which pages are cached.
+#![deny(unsafe_code)]
+
 pub mod experiments;
+#[allow(unsafe_code)]
 pub mod first_pixel;
 pub mod plot;
 

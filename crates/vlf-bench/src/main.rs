@@ -5,6 +5,8 @@
 //! cargo run --release -p vlf-bench -- figure3 --sizes 1000,16000
 //! ```
 
+#![forbid(unsafe_code)]
+
 use anyhow::Result;
 use clap::{Args, Parser, Subcommand};
 use std::path::PathBuf;

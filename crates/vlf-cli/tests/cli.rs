@@ -6,6 +6,8 @@
 //! signal and that nothing it printed contains "panicked". Bakes use small explicit parameters
 //! (`common::SMALL`) so each takes a few hundredths of a second.
 
+#![forbid(unsafe_code)]
+
 mod common;
 
 use common::{Run, SMALL, command, mesh, names_in, run, s, tempdir, vlf};

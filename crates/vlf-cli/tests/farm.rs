@@ -3,6 +3,8 @@
 //! bakes sharing a cache directory, cache hits, `cache list/verify/prune`, and `--report`.
 //! (`docs/build-farms.md` describes the features; `formats/vlf-shard.md` the shard files.)
 
+#![forbid(unsafe_code)]
+
 mod common;
 
 use common::{BIN, DOCS, Run, SMALL, command, mesh, names_in, s, spawn, vlf, wait};

@@ -10,6 +10,8 @@
 //!   directory, a directory as output) leaves the previous field and no temporary file;
 //! - a field kept mapped while a bake renames a new one over its path keeps answering as before.
 
+#![forbid(unsafe_code)]
+
 mod common;
 
 use common::{BIN, MESHES, Run, command, mesh, names_in, run, s, tempdir, vlf};
