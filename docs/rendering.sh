@@ -5,7 +5,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 # Tools must never read our standard input (see .ci/run).
 exec < <(:)
-cargo build --release -q -p vlf-bake
+cargo build --release -q --bin vlf-bake
 mkdir -p target/rendering docs/images
 vlf-bake() { target/release/vlf-bake "$@"; }
 set -x

@@ -10,6 +10,8 @@
 //! Replacing a mapped field the way `vlf-bake` does (a rename) is tested through the real command
 //! line in `crates/vlf-bake/tests/reliability.rs`.
 
+#![forbid(unsafe_code)]
+
 use std::io::{BufRead, BufReader, Write};
 use std::process::{Command, Stdio};
 use vlf_bake::generate::Rng;

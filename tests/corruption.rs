@@ -11,6 +11,8 @@
 //!
 //! The real command line on a sample of these is tested in `crates/vlf-bake/tests/reliability.rs`.
 
+#![forbid(unsafe_code)]
+
 use vlf_bake::{DepthPolicy, Scene, generate};
 use vlf_format::{FormatError, HEADER_SIZE, SectionKind, TABLE_ENTRY_SIZE, kind_name};
 use vlf_runtime::{Field, OpenError};

@@ -3,6 +3,8 @@
 //!
 //! Regenerate the golden values with `UPDATE_EXPECT=1 cargo test -p vlf-tests --test determinism`.
 
+#![forbid(unsafe_code)]
+
 use std::path::Path;
 use vlf_bake::{BakeConfig, DepthPolicy, NoProgress, Scene, generate, import};
 use vlf_runtime::{Field, hex};

@@ -4,6 +4,8 @@
 //! (`fixtures/fuzz-regressions/<target>/`, each named after what it caught). `docs/fuzzing.md`
 //! says how to run the fuzzer itself.
 
+#![forbid(unsafe_code)]
+
 use std::path::{Path, PathBuf};
 
 fn root() -> PathBuf {

@@ -5,6 +5,8 @@
 //! intervals. Plus the structure itself: every triangle is in every leaf it overlaps, the build is
 //! deterministic, queries allocate nothing.
 
+#![forbid(unsafe_code)]
+
 use vlf_bake::Scene;
 use vlf_bake::generate::{self, Rng};
 use vlf_geom::{BruteForce, Intersector, Ray};

@@ -10,6 +10,8 @@
 //!   must be *sound* (a hit is a real hit on a stored triangle, never closer than the true closest;
 //!   an any-hit is a real hit) and each lie confined to the rays that use the lied-about direction.
 
+#![forbid(unsafe_code)]
+
 use vlf_bake::generate::Rng;
 use vlf_bake::{DepthPolicy, Scene, generate};
 use vlf_format::{BeamRecord, FieldReader, LOOKUP_FLIP, LOOKUP_NONE, SectionKind, TileRecord};

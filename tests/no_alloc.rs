@@ -1,6 +1,8 @@
 //! Queries allocate nothing: a counting global allocator sees zero allocations across a frame of
 //! closest-hit and any-hit queries (and `Field` is `Send + Sync`: queried from several threads).
 
+#![forbid(unsafe_code)]
+
 use vlf_bake::{DepthPolicy, Scene, generate};
 use vlf_geom::Camera;
 

@@ -1,6 +1,8 @@
 //! Every acceleration path against the brute-force oracle, over many scene families and ray
 //! families (see `vlf_tests` for what "exact" means). Over a million rays in all.
 
+#![forbid(unsafe_code)]
+
 use vlf_bake::generate;
 use vlf_bake::{DepthPolicy, Scene};
 use vlf_tests::{bake, check_field};

@@ -3,6 +3,8 @@
 //! packing does not depend on the thread count; damaged packed files give errors, never panics,
 //! through open, the full verification and `unpack`.
 
+#![forbid(unsafe_code)]
+
 use std::io::Cursor;
 use std::path::{Path, PathBuf};
 use vlf_bake::{BakeConfig, DepthPolicy, NoProgress, Scene, generate, import, pack};

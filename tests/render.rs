@@ -6,6 +6,8 @@
 //! Regenerate the reference pictures with `UPDATE_EXPECT=1 cargo test -p vlf-tests --test render`
 //! and look at them before committing.
 
+#![forbid(unsafe_code)]
+
 use std::path::Path;
 use vlf_bake::{BakeConfig, DepthPolicy, NoProgress, import};
 use vlf_geom::BruteForce;

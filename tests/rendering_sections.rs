@@ -3,6 +3,8 @@
 //! that breaks a rule (each case rewritten with valid hashes, so only the rule can catch it), a
 //! flipped byte is caught, and lying records never make the runtime or the renderer panic.
 
+#![forbid(unsafe_code)]
+
 use vlf_bake::{DepthPolicy, MaterialDesc, SceneBuilder, SourceDesc, generate};
 use vlf_format::{CameraRecord, LightRecord, SectionKind, camera_kind, light_kind};
 use vlf_runtime::{CameraProjection, Field, LightKind};

@@ -23,7 +23,8 @@ if ! need /usr/bin/time || ! need hyperfine; then
   apt-get install -y -q time hyperfine >/dev/null 2>&1 || { apt-get update -q >/dev/null && apt-get install -y -q time hyperfine >/dev/null; }
 fi
 
-cargo build --release -q -p vlf-bake -p vlf-runtime --example open
+cargo build --release -q --bin vlf-bake
+cargo build --release -q -p vlf-runtime --example open
 B=$PWD/target/release/vlf-bake
 OPEN=$PWD/target/release/examples/open
 BASE=${1:-/work/tmp-big}
@@ -95,7 +96,7 @@ traced() { python3 -c "import json,sys; d=json.load(open(sys.argv[1])); print(f\
   echo
   echo "The same scene and tiles, more directions: the field grows 16-fold, the bake's peak memory"
   echo "does not. Directions are baked in chunks of about 64 MiB of output and written as they finish"
-  echo "(\`crates/vlf-bake/src/bake.rs\`), so peak memory is the scene, one chunk per thread and the"
+  echo "(\`crates/vlf-bake/src/writer.rs\`), so peak memory is the scene, one chunk per thread and the"
   echo "channel of finished chunks, whatever the number of directions."
   echo
   echo "| triangles | parameters | field | bake s | peak RSS | RSS / field |"

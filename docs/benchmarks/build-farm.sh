@@ -12,7 +12,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 exec </dev/null
-cargo build --release -q -p vlf-bake
+cargo build --release -q --bin vlf-bake
 B=$PWD/target/release/vlf-bake
 W=${1:-target/build-farm}
 OUT=docs/benchmarks/build-farm.md

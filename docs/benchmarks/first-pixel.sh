@@ -17,7 +17,7 @@ OUT=docs/benchmarks/first-pixel
 mkdir -p "$W"
 trap 'rm -f "$W"/*.vlf "$W"/*.obj' EXIT
 
-cargo build --release -q -p vlf-bake -p vlf-bench
+cargo build --release -q -p vlf-cli -p vlf-bench
 B=target/release/vlf-bake
 
 # Same scene, two sizes: 2,500 random triangles (half-extent 0.2, so the centre ray hits), baked

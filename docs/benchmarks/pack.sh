@@ -12,7 +12,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 exec </dev/null
-cargo build --release -q -p vlf-bake
+cargo build --release -q --bin vlf-bake
 cargo build --release -q -p vlf-runtime --example open_time
 B=$PWD/target/release/vlf-bake
 OPEN=$PWD/target/release/examples/open_time

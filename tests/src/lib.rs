@@ -12,6 +12,9 @@
 //!   magnitude from an edge of its triangle), the ray is counted as ambiguous and reported, not
 //!   failed.
 
+// Only `CountingAllocator` needs `unsafe` (a global allocator is an unsafe trait).
+#![deny(unsafe_code)]
+
 pub mod fuzz;
 
 use rayon::prelude::*;
@@ -374,6 +377,7 @@ pub fn allocations_on_this_thread() -> u64 {
 }
 
 // SAFETY: forwards every call to the system allocator unchanged; it only counts them.
+#[allow(unsafe_code)]
 unsafe impl std::alloc::GlobalAlloc for CountingAllocator {
     unsafe fn alloc(&self, layout: std::alloc::Layout) -> *mut u8 {
         THIS_THREAD_ALLOCS.with(|c| c.set(c.get() + 1));

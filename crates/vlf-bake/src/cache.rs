@@ -27,10 +27,10 @@
 //! modify, chmod or truncate in place, and none of that may reach the cache. An entry that fails
 //! the checks is removed and the bake proceeds. `vlf-bake cache verify` hashes every byte.
 
-use crate::bake::{
-    AtomicFile, PARAMETER_KINDS, Prepared, SharedSection, input_hash, remove_stale_temp_files, scene_sections,
-};
+use crate::atomic::{AtomicFile, remove_stale_temp_files};
 use crate::inspect;
+use crate::prepare::Prepared;
+use crate::sections::{PARAMETER_KINDS, SharedSection, input_hash, scene_sections};
 use std::fs::File;
 use std::io::{self, Seek};
 use std::path::{Path, PathBuf};
@@ -96,7 +96,7 @@ pub struct Cache {
 /// What a lookup found.
 pub enum Lookup {
     /// The entry was copied to the output.
-    Hit(Box<Hit>),
+    Hit(Box<CacheHit>),
     /// No entry under the key.
     Miss,
     /// An entry was there but could not be read, or failed the checks (and was removed). Bake
@@ -104,8 +104,8 @@ pub enum Lookup {
     Unusable { problem: String },
 }
 
-/// A materialised entry.
-pub struct Hit {
+/// A materialised entry: what the field copied to the output says of itself.
+pub struct CacheHit {
     pub header: Header,
     pub params: vlf_format::ParamsRecord,
     pub statistics: vlf_format::StatisticsRecord,
@@ -218,7 +218,7 @@ impl Cache {
             if found != *key {
                 return Err(format!("it holds the field of key {found}"));
             }
-            Ok(Hit {
+            Ok(CacheHit {
                 header: *r.header,
                 params: *r.params,
                 statistics: *r.statistics,
@@ -320,7 +320,7 @@ impl Cache {
 
     /// Removes entries last used more than `max_age` ago, then the least recently used ones
     /// until the rest fit in `max_size` bytes; and the temporary files of stores that crashed
-    /// (unlocked, see [`crate::bake::remove_stale_temp_files`]).
+    /// (unlocked, see [`crate::atomic::remove_stale_temp_files`]).
     pub fn prune(&self, max_size: Option<u64>, max_age: Option<Duration>) -> io::Result<PruneReport> {
         let mut report = PruneReport::default();
         // A store writes `.KEY.vlf.XXXXXX.tmp` beside `KEY.vlf`: clean up per entry name.

@@ -2,12 +2,18 @@
 //! cache, choose parameters, bake a field or a shard, store the field in the cache; or check and
 //! merge shards and store the result. Each phase is timed for the report ([`crate::report`]).
 
-use crate::bake::{AtomicFile, BakeError, BakeSummary, Prepared, Progress, Statistics, bake_into, params_record};
+use crate::atomic::AtomicFile;
 use crate::cache::{Cache, CacheKey, Lookup, key_for_scene, key_of_field};
+use crate::error::BakeError;
 use crate::params::{BakeConfig, Choice, choose};
+use crate::prepare::Prepared;
+use crate::progress::Progress;
 use crate::report::{CacheReport, InputFile, OutputInfo, Parameters, Phases, Report, ShardInfo};
 use crate::scene::{ImportError, ImportReport};
+use crate::sections::params_record;
 use crate::shard::{MergeSummary, ShardError, ShardSpec, merge};
+use crate::statistics::Statistics;
+use crate::writer::{BakeSummary, write_into};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 use vlf_format::hex;
@@ -52,8 +58,9 @@ pub struct BakeOutcome {
     pub warnings: Vec<String>,
 }
 
-/// Runs a bake (see the module documentation).
-pub fn bake(job: &BakeJob<'_>, progress: &dyn Progress) -> Result<BakeOutcome, JobError> {
+/// Runs a whole bake job (see the module documentation): import, the cache, the bake of a field
+/// or shard, and the report.
+pub fn run_bake_job(job: &BakeJob<'_>, progress: &dyn Progress) -> Result<BakeOutcome, JobError> {
     let started = Instant::now();
     let phases = Phases::new(progress);
     let output = job.output;
@@ -106,7 +113,7 @@ pub fn bake(job: &BakeJob<'_>, progress: &dyn Progress) -> Result<BakeOutcome, J
                     tile_resolution: p.tile_resolution,
                     leaf_size: p.leaf_size,
                     max_depth: p.max_depth,
-                    automatic: p.requested_directions == 0 || p.requested_tiles == 0,
+                    automatic: p.is_automatic(),
                     choice: format!("copied from the cache entry {}", cache.entry_path(&key).display()),
                     estimated_bytes: None,
                     bytes: hit.header.file_length,
@@ -148,7 +155,7 @@ pub fn bake(job: &BakeJob<'_>, progress: &dyn Progress) -> Result<BakeOutcome, J
         announce(&choice);
     }
     let tmp = AtomicFile::create(output).map_err(io_err)?;
-    let baked = bake_into(&prep, &choice, &request, tmp.file(), output, job.shard, &phases)?;
+    let baked = write_into(&prep, &choice, &request, tmp.file(), output, job.shard, &phases)?;
     let written = tmp.file().try_clone().map_err(io_err)?;
     tmp.commit().map_err(io_err)?;
     phases.end();
@@ -211,8 +218,9 @@ pub struct MergeOutcome {
     pub warnings: Vec<String>,
 }
 
-/// Checks and merges `parts` into `output`; with a cache, stores the merged field in it.
-pub fn merge_job(
+/// Runs a whole merge job: checks and merges `parts` into `output`; with a cache, stores the
+/// merged field in it; and the report.
+pub fn run_merge_job(
     parts: &[PathBuf],
     output: &Path,
     cache: Option<Cache>,

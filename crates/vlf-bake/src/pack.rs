@@ -8,7 +8,8 @@
 //! window is at most 8 MiB at the levels `pack` writes, and zstd refuses frames asking for more
 //! than 128 MiB) and its buffers.
 
-use crate::bake::{AtomicFile, Progress, parent_dir};
+use crate::atomic::{AtomicFile, parent_dir};
+use crate::progress::Progress;
 use rayon::prelude::*;
 use serde::Serialize;
 use std::fs::File;

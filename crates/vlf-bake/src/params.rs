@@ -5,12 +5,16 @@
 //! small (finer tiles need more directions, `docs/architecture.md`), and take the finest rung
 //! whose estimated size fits the budget, the smaller of `--max-bytes` and
 //! `--max-bytes-per-triangle` × the triangle count, stopping early once tiles are already nearly
-//! singular (more resolution then buys little speed for much memory). The estimate bakes a few sample directions for real, so it
-//! accounts for the scene's actual shape.
+//! singular (more resolution then buys little speed for much memory). The estimate bakes a few
+//! sample directions for real, so it accounts for the scene's actual shape; this module asks for
+//! those samples through [`Measure`], which the prepared scene implements
+//! (`crate::estimate`), so that the policy here depends on nothing else in the crate.
 
-use crate::bake::{BakeError, Prepared, sample_direction_bytes};
-use vlf_format::{MAX_DEPTH, Request};
+use vlf_format::{MAX_DEPTH, Request, StatisticsRecord, size};
 use vlf_geom::Lattice;
+
+/// The conservative margin as a fraction of the bounding radius (`formats/vlf.md` §6.2).
+pub const MARGIN_FRACTION: f64 = 1.0 / (1u64 << 20) as f64;
 
 /// The default size budget for automatic parameters: 4 GiB.
 pub const DEFAULT_MAX_BYTES: u64 = 4 << 30;
@@ -42,6 +46,17 @@ pub const LADDER: [(u32, u32); 9] =
 pub struct DepthPolicy {
     pub leaf_size: u32,
     pub max_depth: u32,
+}
+
+impl DepthPolicy {
+    /// The depth of a tile with `m` distinct triangles (`formats/vlf.md` §6.3).
+    pub fn depth_for(&self, m: u64) -> u32 {
+        let mut depth = 0;
+        while depth < self.max_depth && (self.leaf_size as u64) << depth < m {
+            depth += 1;
+        }
+        depth
+    }
 }
 
 impl Default for DepthPolicy {
@@ -78,31 +93,31 @@ impl Default for BakeConfig {
 
 impl BakeConfig {
     /// Checks ranges; the CLI calls it so bad flags fail before any work.
-    pub fn validate(&self) -> Result<(), BakeError> {
-        let bad = |m: String| Err(BakeError::Params(m));
+    pub fn validate(&self) -> Result<(), ParamsError> {
         if let Some(l) = self.directions {
             if !(3..=33_554_433).contains(&l) {
-                return bad(format!("--directions {l} is outside 3..=33554433 (a lattice of N = 1..=4096)"));
+                return Err(ParamsError::Directions(l));
             }
         }
         if let Some(n) = self.tiles {
             if !(1..=65536).contains(&n) {
-                return bad(format!("--tiles {n} is outside 1..=65536"));
+                return Err(ParamsError::Tiles(n));
             }
         }
         if self.depth.leaf_size == 0 {
-            return bad("--leaf-size must be at least 1".into());
+            return Err(ParamsError::LeafSize);
         }
         if self.depth.max_depth > MAX_DEPTH {
-            return bad(format!("--max-depth {} exceeds the format's limit of {MAX_DEPTH}", self.depth.max_depth));
+            return Err(ParamsError::MaxDepth(self.depth.max_depth));
         }
         if self.max_bytes == 0 || self.max_bytes_per_triangle == 0 {
-            return bad("--max-bytes and --max-bytes-per-triangle must be positive".into());
+            return Err(ParamsError::Budget);
         }
         Ok(())
     }
 
-    /// The request recorded in the file and hashed into the input hash.
+    /// The request recorded in the file and hashed into the input hash: `None` ("choose for me")
+    /// is encoded as 0 (`formats/vlf.md` §3.3; [`Request::requested_directions`] decodes it).
     pub fn request(&self) -> Request {
         Request {
             requested_directions: self.directions.unwrap_or(0),
@@ -134,31 +149,97 @@ pub struct Choice {
     pub reason: String,
 }
 
-/// A lower bound on a field's size: every tile costs a record and a bound, every triangle lands in
-/// at least one tile per direction, plus the fixed sections.
+/// Why parameters cannot be chosen: a flag out of range, or a budget nothing fits. The messages
+/// name the flags, for the command line to print as they are.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum ParamsError {
+    #[error("--directions {0} is outside 3..=33554433 (a lattice of N = 1..=4096)")]
+    Directions(u32),
+    #[error("--tiles {0} is outside 1..=65536")]
+    Tiles(u32),
+    #[error("--leaf-size must be at least 1")]
+    LeafSize,
+    #[error("--max-depth {0} exceeds the format's limit of {max}", max = MAX_DEPTH)]
+    MaxDepth(u32),
+    #[error("--max-bytes and --max-bytes-per-triangle must be positive")]
+    Budget,
+    /// Explicit parameters whose field cannot fit `--max-bytes`, whatever the scene's shape.
+    #[error(
+        "{directions} directions × {tiles}² tiles need at least {} for {triangles} triangles, over the --max-bytes budget of {}",
+        human_bytes(*.at_least),
+        human_bytes(*.budget)
+    )]
+    ExplicitOverBudget { directions: u64, tiles: u32, triangles: u64, at_least: u64, budget: u64 },
+    /// Not even the coarsest rung of the automatic search fits the budget.
+    #[error(
+        "even the coarsest field ({directions} directions × {tiles}² tiles) does not fit the budget of {} for {triangles} triangles \
+         (--max-bytes {}, --max-bytes-per-triangle {}); raise them or give --directions and --tiles",
+        human_bytes(*.budget),
+        human_bytes(*.max_bytes),
+        human_bytes(*.max_bytes_per_triangle)
+    )]
+    NothingFits {
+        directions: u64,
+        tiles: u32,
+        triangles: u64,
+        budget: u64,
+        max_bytes: u64,
+        max_bytes_per_triangle: u64,
+    },
+}
+
+/// What baking a few sample directions of a candidate measured.
+#[derive(Clone, Copy, Debug)]
+pub struct Sample {
+    /// The mean bytes a direction adds to the file.
+    pub bytes_per_direction: u64,
+    /// The sample directions' statistics, summed.
+    pub statistics: StatisticsRecord,
+}
+
+/// What choosing parameters needs of a scene: its size, and what a candidate's directions cost,
+/// measured on a few of them. The prepared scene answers by baking them (`crate::estimate`); tests
+/// answer with a model.
+pub trait Measure {
+    /// What measuring can fail with; parameter errors convert into it.
+    type Error: From<ParamsError>;
+    /// The triangles of the scene.
+    fn triangle_count(&self) -> u64;
+    /// The radius of the scene's bounding sphere, in world units.
+    fn radius(&self) -> f64;
+    /// Measures `directions` sample directions of a field with `params`.
+    fn sample(&self, params: &Params, directions: usize) -> Result<Sample, Self::Error>;
+}
+
+/// A lower bound on a field's size (`vlf_format::size::lower_bound`): every tile costs a record
+/// and a bound, every triangle lands in at least one tile per direction, plus the fixed sections.
 pub fn lower_bound_bytes(triangles: u64, lattice_n: u32, tiles: u32) -> u64 {
     let l = Lattice::new(lattice_n).direction_count();
-    let n2 = tiles as u64 * tiles as u64;
-    l * (16 * n2 + 4 * triangles + 32 + 16 + 72) + 56 * triangles
+    size::lower_bound(l, tiles as u64 * tiles as u64, triangles)
 }
 
-fn params_for(prep: &Prepared<'_>, lattice_n: u32, tiles: u32, depth: DepthPolicy) -> Params {
-    Params { lattice_n, tiles, depth, margin: prep.radius * crate::bake::MARGIN_FRACTION }
+fn params_for(radius: f64, lattice_n: u32, tiles: u32, depth: DepthPolicy) -> Params {
+    Params { lattice_n, tiles, depth, margin: radius * MARGIN_FRACTION }
 }
 
-/// Estimated size of a field: sample directions baked for real, scaled to all directions.
-fn estimate(prep: &Prepared<'_>, p: &Params) -> Result<(u64, f64), BakeError> {
-    let (per_direction, stats) = sample_direction_bytes(prep, p, SAMPLE_DIRECTIONS)?;
+/// Estimated size of a field: sample directions measured, scaled to all directions; and the mean
+/// triangles per non-empty tile of the sample.
+fn estimate<M: Measure>(scene: &M, p: &Params) -> Result<(u64, f64), M::Error> {
+    let sample = scene.sample(p, SAMPLE_DIRECTIONS)?;
+    let stats = &sample.statistics;
     let l = Lattice::new(p.lattice_n).direction_count();
-    let fixed = 56 * prep.triangle_count() as u64 + 64 * 16;
     let nonempty = (stats.tile_count - stats.empty_tiles).max(1);
-    Ok((l * per_direction + fixed, stats.tile_triangle_sum as f64 / nonempty as f64))
+    Ok((
+        size::estimate(l, sample.bytes_per_direction, scene.triangle_count()),
+        stats.tile_triangle_sum as f64 / nonempty as f64,
+    ))
 }
 
-/// Chooses the parameters for `config` on the prepared scene.
-pub fn choose(prep: &Prepared<'_>, config: &BakeConfig) -> Result<Choice, BakeError> {
+/// Chooses the parameters for `config` on a scene (for a bake, the prepared scene).
+pub fn choose<M: Measure>(scene: &M, config: &BakeConfig) -> Result<Choice, M::Error> {
     config.validate()?;
-    let tris = prep.triangle_count() as u64;
+    let tris = scene.triangle_count();
     // Explicit parameters are held to the absolute budget only; automatic ones also to the
     // per-triangle allowance.
     let budget = config.max_bytes;
@@ -167,15 +248,17 @@ pub fn choose(prep: &Prepared<'_>, config: &BakeConfig) -> Result<Choice, BakeEr
     if let (Some(lattice_n), Some(tiles)) = (explicit_n, config.tiles) {
         let lb = lower_bound_bytes(tris, lattice_n, tiles);
         if lb > budget {
-            return Err(BakeError::Params(format!(
-                "{} directions × {tiles}² tiles need at least {} for {tris} triangles, over the --max-bytes budget of {}",
-                Lattice::new(lattice_n).direction_count(),
-                human_bytes(lb),
-                human_bytes(budget)
-            )));
+            return Err(ParamsError::ExplicitOverBudget {
+                directions: Lattice::new(lattice_n).direction_count(),
+                tiles,
+                triangles: tris,
+                at_least: lb,
+                budget,
+            }
+            .into());
         }
         return Ok(Choice {
-            params: params_for(prep, lattice_n, tiles, config.depth),
+            params: params_for(scene.radius(), lattice_n, tiles, config.depth),
             automatic: false,
             estimated_bytes: None,
             reason: "as requested".into(),
@@ -205,8 +288,8 @@ pub fn choose(prep: &Prepared<'_>, config: &BakeConfig) -> Result<Choice, BakeEr
         if lower_bound_bytes(tris, lattice_n, tiles) > auto_budget {
             break;
         }
-        let p = params_for(prep, lattice_n, tiles, config.depth);
-        let (bytes, load) = estimate(prep, &p)?;
+        let p = params_for(scene.radius(), lattice_n, tiles, config.depth);
+        let (bytes, load) = estimate(scene, &p)?;
         if bytes > auto_budget {
             break;
         }
@@ -217,14 +300,15 @@ pub fn choose(prep: &Prepared<'_>, config: &BakeConfig) -> Result<Choice, BakeEr
     }
     let Some((params, bytes, load)) = chosen else {
         let (ln, t) = rungs[0];
-        return Err(BakeError::Params(format!(
-            "even the coarsest field ({} directions × {t}² tiles) does not fit the budget of {} for {tris} triangles \
-             (--max-bytes {}, --max-bytes-per-triangle {}); raise them or give --directions and --tiles",
-            Lattice::new(ln).direction_count(),
-            human_bytes(auto_budget),
-            human_bytes(budget),
-            human_bytes(config.max_bytes_per_triangle)
-        )));
+        return Err(ParamsError::NothingFits {
+            directions: Lattice::new(ln).direction_count(),
+            tiles: t,
+            triangles: tris,
+            budget: auto_budget,
+            max_bytes: budget,
+            max_bytes_per_triangle: config.max_bytes_per_triangle,
+        }
+        .into());
     };
     Ok(Choice {
         params,
@@ -251,4 +335,282 @@ pub fn human_bytes(b: u64) -> String {
         u += 1;
     }
     if u == 0 { format!("{b} B") } else { format!("{v:.1} {}", UNITS[u]) }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::cell::RefCell;
+
+    /// A scene whose directions cost what a model says: `16 n² + 8 T + 200` bytes per direction
+    /// (above the lower bound, as real directions are), and `T / n²` triangles per non-empty tile
+    /// (at least one). Records every rung it is asked about.
+    struct Model {
+        triangles: u64,
+        sampled: RefCell<Vec<(u32, u32)>>,
+    }
+
+    impl Model {
+        fn new(triangles: u64) -> Self {
+            Model { triangles, sampled: RefCell::new(Vec::new()) }
+        }
+
+        fn bytes_per_direction(&self, tiles: u32) -> u64 {
+            16 * tiles as u64 * tiles as u64 + 8 * self.triangles + 200
+        }
+
+        fn load(&self, tiles: u32) -> f64 {
+            (self.triangles as f64 / (tiles as f64 * tiles as f64)).max(1.0)
+        }
+
+        /// The estimate `choose` makes of a rung.
+        fn estimate(&self, lattice_n: u32, tiles: u32) -> u64 {
+            let l = Lattice::new(lattice_n).direction_count();
+            size::estimate(l, self.bytes_per_direction(tiles), self.triangles)
+        }
+
+        fn sampled(&self) -> Vec<(u32, u32)> {
+            self.sampled.borrow().clone()
+        }
+    }
+
+    impl Measure for Model {
+        type Error = ParamsError;
+
+        fn triangle_count(&self) -> u64 {
+            self.triangles
+        }
+
+        fn radius(&self) -> f64 {
+            2.0
+        }
+
+        fn sample(&self, p: &Params, directions: usize) -> Result<Sample, ParamsError> {
+            assert_eq!(directions, SAMPLE_DIRECTIONS);
+            self.sampled.borrow_mut().push((p.lattice_n, p.tiles));
+            let n2 = p.tiles as u64 * p.tiles as u64;
+            let mut statistics = StatisticsRecord::zeroed_record();
+            statistics.tile_count = n2;
+            statistics.tile_triangle_sum = (self.load(p.tiles) * n2 as f64) as u64;
+            Ok(Sample { bytes_per_direction: self.bytes_per_direction(p.tiles), statistics })
+        }
+    }
+
+    /// A scene that must never be measured.
+    struct Unmeasured;
+
+    impl Measure for Unmeasured {
+        type Error = ParamsError;
+        fn triangle_count(&self) -> u64 {
+            1000
+        }
+        fn radius(&self) -> f64 {
+            4.0
+        }
+        fn sample(&self, _: &Params, _: usize) -> Result<Sample, ParamsError> {
+            panic!("explicit parameters need no estimate")
+        }
+    }
+
+    fn automatic(max_bytes: u64) -> BakeConfig {
+        BakeConfig { max_bytes, max_bytes_per_triangle: u64::MAX / 2, ..BakeConfig::default() }
+    }
+
+    #[test]
+    fn explicit_parameters_are_taken_as_requested_without_an_estimate() {
+        let config = BakeConfig { directions: Some(33), tiles: Some(16), ..BakeConfig::default() };
+        let choice = choose(&Unmeasured, &config).unwrap();
+        let expected = Params { lattice_n: 4, tiles: 16, depth: DepthPolicy::default(), margin: 4.0 * MARGIN_FRACTION };
+        assert_eq!(choice.params, expected);
+        assert!(!choice.automatic);
+        assert_eq!((choice.estimated_bytes, choice.reason.as_str()), (None, "as requested"));
+        // Directions round up to the next lattice size 2N² + 1.
+        let config = BakeConfig { directions: Some(34), tiles: Some(8), ..BakeConfig::default() };
+        assert_eq!(choose(&Unmeasured, &config).unwrap().params.lattice_n, 5);
+    }
+
+    #[test]
+    fn explicit_parameters_whose_lower_bound_exceeds_max_bytes_are_refused() {
+        let lb = lower_bound_bytes(1000, 4, 16);
+        assert_eq!(lb, 33 * (16 * 256 + 4 * 1000 + 32 + 16 + 72) + 56 * 1000);
+        let fits = BakeConfig { directions: Some(33), tiles: Some(16), max_bytes: lb, ..BakeConfig::default() };
+        assert!(choose(&Unmeasured, &fits).is_ok(), "the bound itself fits");
+        let config = BakeConfig { max_bytes: lb - 1, ..fits };
+        let e = choose(&Unmeasured, &config).unwrap_err();
+        assert_eq!(
+            e,
+            ParamsError::ExplicitOverBudget {
+                directions: 33,
+                tiles: 16,
+                triangles: 1000,
+                at_least: lb,
+                budget: lb - 1
+            }
+        );
+        assert_eq!(
+            e.to_string(),
+            "33 directions × 16² tiles need at least 319.5 KiB for 1000 triangles, over the --max-bytes budget of 319.5 KiB"
+        );
+    }
+
+    #[test]
+    fn the_ladder_climbs_to_the_finest_rung_whose_estimate_fits() {
+        // Dense enough that tiles never become sparse: only the budget stops the climb.
+        let model = Model::new(10_000_000);
+        let budget = model.estimate(LADDER[3].0, LADDER[3].1);
+        let choice = choose(&model, &automatic(budget)).unwrap();
+        assert_eq!((choice.params.lattice_n, choice.params.tiles), LADDER[3]);
+        assert!(choice.automatic);
+        assert_eq!(choice.estimated_bytes, Some(budget));
+        assert_eq!(choice.params.margin, 2.0 * MARGIN_FRACTION);
+        // The next rung was estimated and found over the budget; none beyond it.
+        assert_eq!(model.sampled(), LADDER[..5]);
+        assert!(choice.reason.starts_with("chose 129 directions × 32² tiles: estimated "), "{}", choice.reason);
+        // A budget one byte smaller stops a rung earlier.
+        let choice = choose(&Model::new(10_000_000), &automatic(budget - 1)).unwrap();
+        assert_eq!((choice.params.lattice_n, choice.params.tiles), LADDER[2]);
+    }
+
+    #[test]
+    fn the_ladder_stops_once_tiles_are_nearly_singular() {
+        // 3 × 64² triangles: three per tile at 64² tiles.
+        let model = Model::new(3 * 64 * 64);
+        let choice = choose(&model, &automatic(u64::MAX / 2)).unwrap();
+        assert_eq!((choice.params.lattice_n, choice.params.tiles), (8, 64));
+        assert_eq!(model.sampled(), LADDER[..5], "nothing finer is estimated");
+        assert!(choice.reason.ends_with(", 3.0 triangles per non-empty tile"), "{}", choice.reason);
+    }
+
+    #[test]
+    fn the_per_triangle_allowance_caps_automatic_parameters() {
+        // The allowance times the triangles lies between the estimates of rungs 1 and 2.
+        let model = Model::new(100_000);
+        let allowance = model.estimate(LADDER[1].0, LADDER[1].1).div_ceil(100_000);
+        assert!(allowance * 100_000 < model.estimate(LADDER[2].0, LADDER[2].1));
+        let config = BakeConfig { max_bytes: u64::MAX / 2, max_bytes_per_triangle: allowance, ..BakeConfig::default() };
+        let choice = choose(&model, &config).unwrap();
+        assert_eq!((choice.params.lattice_n, choice.params.tiles), LADDER[1]);
+        // Explicit parameters are held to --max-bytes only.
+        let explicit = BakeConfig { directions: Some(33), tiles: Some(256), ..config };
+        assert_eq!(choose(&model, &explicit).unwrap().params.tiles, 256);
+    }
+
+    #[test]
+    fn with_the_tiles_fixed_only_the_lattice_climbs_and_sparse_tiles_do_not_stop_it() {
+        let model = Model::new(10);
+        let config = BakeConfig { tiles: Some(32), ..automatic(u64::MAX / 2) };
+        let choice = choose(&model, &config).unwrap();
+        assert_eq!((choice.params.lattice_n, choice.params.tiles), (16, 32), "up to N = n/2");
+        assert_eq!(model.sampled(), [(2, 32), (4, 32), (8, 32), (16, 32)]);
+    }
+
+    #[test]
+    fn with_the_directions_fixed_the_tiles_climb_towards_four_times_the_lattice() {
+        let model = Model::new(10_000_000);
+        let config = BakeConfig { directions: Some(33), ..automatic(u64::MAX / 2) };
+        let choice = choose(&model, &config).unwrap();
+        assert_eq!((choice.params.lattice_n, choice.params.tiles), (4, 16));
+        assert_eq!(model.sampled(), [(4, 8), (4, 16)]);
+    }
+
+    #[test]
+    fn a_budget_that_nothing_fits_is_an_error_naming_the_coarsest_rung() {
+        let model = Model::new(1000);
+        let config = BakeConfig { max_bytes: 1000, max_bytes_per_triangle: 2048, ..BakeConfig::default() };
+        let e = choose(&model, &config).unwrap_err();
+        assert_eq!(
+            e,
+            ParamsError::NothingFits {
+                directions: 9,
+                tiles: 16,
+                triangles: 1000,
+                budget: 1000,
+                max_bytes: 1000,
+                max_bytes_per_triangle: 2048
+            }
+        );
+        assert_eq!(
+            e.to_string(),
+            "even the coarsest field (9 directions × 16² tiles) does not fit the budget of 1000 B for 1000 triangles \
+             (--max-bytes 1000 B, --max-bytes-per-triangle 2.0 KiB); raise them or give --directions and --tiles"
+        );
+        assert!(model.sampled().is_empty(), "the lower bound alone rules the rung out");
+    }
+
+    #[test]
+    fn flags_out_of_range_are_refused_before_any_estimate() {
+        let d = BakeConfig::default();
+        let depth = |leaf_size, max_depth| BakeConfig { depth: DepthPolicy { leaf_size, max_depth }, ..d };
+        for (config, error, message) in [
+            (
+                BakeConfig { directions: Some(2), ..d },
+                ParamsError::Directions(2),
+                "--directions 2 is outside 3..=33554433 (a lattice of N = 1..=4096)",
+            ),
+            (
+                BakeConfig { directions: Some(33_554_434), ..d },
+                ParamsError::Directions(33_554_434),
+                "--directions 33554434",
+            ),
+            (BakeConfig { tiles: Some(0), ..d }, ParamsError::Tiles(0), "--tiles 0 is outside 1..=65536"),
+            (BakeConfig { tiles: Some(65537), ..d }, ParamsError::Tiles(65537), "--tiles 65537 is outside"),
+            (depth(0, 8), ParamsError::LeafSize, "--leaf-size must be at least 1"),
+            (depth(4, 25), ParamsError::MaxDepth(25), "--max-depth 25 exceeds the format's limit of 24"),
+            (
+                BakeConfig { max_bytes: 0, ..d },
+                ParamsError::Budget,
+                "--max-bytes and --max-bytes-per-triangle must be positive",
+            ),
+            (BakeConfig { max_bytes_per_triangle: 0, ..d }, ParamsError::Budget, "must be positive"),
+        ] {
+            assert_eq!(config.validate(), Err(error.clone()));
+            assert_eq!(choose(&Unmeasured, &config).unwrap_err(), error);
+            assert!(error.to_string().contains(message), "{error}");
+        }
+        for ok in [BakeConfig { directions: Some(3), tiles: Some(1), ..d }, depth(1, MAX_DEPTH), d] {
+            assert_eq!(ok.validate(), Ok(()));
+        }
+    }
+
+    #[test]
+    fn the_request_encodes_automatic_values_as_zero() {
+        let request = BakeConfig::default().request();
+        assert_eq!((request.requested_directions, request.requested_tiles), (0, 0));
+        assert_eq!((request.requested_directions(), request.requested_tiles()), (None, None));
+        assert!(request.is_automatic());
+        let request = BakeConfig { directions: Some(129), tiles: Some(64), ..BakeConfig::default() }.request();
+        assert_eq!((request.requested_directions(), request.requested_tiles()), (Some(129), Some(64)));
+        assert!(!request.is_automatic());
+        let half = BakeConfig { tiles: Some(64), ..BakeConfig::default() }.request();
+        assert!(half.is_automatic(), "the directions are still chosen");
+    }
+
+    #[test]
+    fn a_tile_gets_the_smallest_depth_whose_leaves_hold_leaf_size_triangles() {
+        let policy = DepthPolicy { leaf_size: 4, max_depth: 8 };
+        for (m, depth) in
+            [(0, 0), (1, 0), (4, 0), (5, 1), (8, 1), (9, 2), (16, 2), (17, 3), (1024, 8), (1025, 8), (1 << 40, 8)]
+        {
+            assert_eq!(policy.depth_for(m), depth, "{m} triangles");
+        }
+        let linear = DepthPolicy { leaf_size: 4, max_depth: 0 };
+        assert_eq!(linear.depth_for(1_000_000), 0, "--max-depth 0: the paper's linear tiles");
+        let single = DepthPolicy { leaf_size: 1, max_depth: MAX_DEPTH };
+        assert_eq!((single.depth_for(2), single.depth_for(3), single.depth_for(1 << 30)), (1, 2, MAX_DEPTH));
+    }
+
+    #[test]
+    fn the_depth_is_minimal_and_bounded_for_every_policy() {
+        for leaf_size in [1, 2, 3, 4, 7, 16] {
+            for max_depth in [0, 1, 5, 8, MAX_DEPTH] {
+                let policy = DepthPolicy { leaf_size, max_depth };
+                for m in 0..3000u64 {
+                    let d = policy.depth_for(m);
+                    assert!(d <= max_depth, "{policy:?}, {m}: depth {d}");
+                    assert!(d == max_depth || (leaf_size as u64) << d >= m, "{policy:?}, {m}: leaves too small");
+                    assert!(d == 0 || (leaf_size as u64) << (d - 1) < m, "{policy:?}, {m}: not the smallest depth");
+                }
+            }
+        }
+    }
 }

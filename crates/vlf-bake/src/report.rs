@@ -2,7 +2,8 @@
 //! what a CI job uploads next to the field. The schema is versioned ([`SCHEMA`]) and documented in
 //! `docs/build-farms.md`; fields are only ever added within a schema version.
 
-use crate::bake::{BAKER_REVISION, Progress};
+use crate::progress::Progress;
+use crate::sections::BAKER_REVISION;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
@@ -93,8 +94,8 @@ impl Parameters {
     pub fn from_record(p: &ParamsRecord, source: &'static str, estimated_bytes: Option<u64>) -> Self {
         Parameters {
             requested: Requested {
-                directions: (p.requested_directions != 0).then_some(p.requested_directions),
-                tiles: (p.requested_tiles != 0).then_some(p.requested_tiles),
+                directions: p.requested_directions(),
+                tiles: p.requested_tiles(),
                 leaf_size: p.leaf_size,
                 max_depth: p.max_depth,
                 max_bytes: p.max_bytes,
@@ -220,7 +221,7 @@ impl Report {
 
     /// Writes the report as pretty JSON to `path`, atomically.
     pub fn write(&self, path: &Path) -> std::io::Result<()> {
-        crate::bake::write_atomically(path, |w| {
+        crate::atomic::write_atomically(path, |w| {
             serde_json::to_writer_pretty(&mut *w, self)?;
             std::io::Write::write_all(w, b"\n")
         })

@@ -1,5 +1,5 @@
 //! Sharded bakes (`formats/vlf-shard.md`): `bake --shard K/N` bakes the directions
-//! `⌊K·l/N⌋ .. ⌊(K+1)·l/N⌋` into a shard file ([`crate::bake::bake_into`]), and [`merge`] checks a
+//! `⌊K·l/N⌋ .. ⌊(K+1)·l/N⌋` into a shard file ([`crate::writer::write_into`]), and [`merge`] checks a
 //! set of shards and streams them into the field a single bake of the same inputs writes, byte
 //! for byte.
 //!
@@ -10,7 +10,10 @@
 //! shard is hashed and compared with its table on the way; the output is a temporary file renamed
 //! over the path only when everything checked out.
 
-use crate::bake::{AtomicFile, BAKER_REVISION, Progress, merge_stats};
+use crate::atomic::AtomicFile;
+use crate::progress::Progress;
+use crate::sections::BAKER_REVISION;
+use crate::statistics::merge_stats;
 use std::fmt;
 use std::fs::File;
 use std::io::{self, Write};
@@ -51,6 +54,14 @@ impl FromStr for ShardSpec {
             ));
         }
         Ok(ShardSpec { index, count })
+    }
+}
+
+impl ShardSpec {
+    /// The directions `⌊K·l/N⌋ .. ⌊(K+1)·l/N⌋` this shard holds of a field of `direction_count`
+    /// directions (`formats/vlf-shard.md` §2).
+    pub fn directions(&self, direction_count: u32) -> std::ops::Range<u32> {
+        shard_directions(self.index, self.count, direction_count)
     }
 }
 
@@ -314,11 +325,11 @@ impl ShardFile {
 
 /// The request a PARAMS record holds (`formats/vlf.md` §3.3), as text for messages.
 fn requested(p: &ParamsRecord) -> String {
-    let auto = |v: u32| if v == 0 { "automatic".to_string() } else { v.to_string() };
+    let auto = |v: Option<u32>| v.map_or("automatic".to_string(), |v| v.to_string());
     format!(
         "requested directions {}, tiles {}, leaf size {}, max depth {}, max bytes {}, max bytes per triangle {}",
-        auto(p.requested_directions),
-        auto(p.requested_tiles),
+        auto(p.requested_directions()),
+        auto(p.requested_tiles()),
         p.leaf_size,
         p.max_depth,
         p.max_bytes,
@@ -442,7 +453,7 @@ pub fn merge(parts: &[PathBuf], output: &Path, progress: &dyn Progress) -> Resul
     // Explicit parameters are held to --max-bytes (`bake` refuses such a field; each shard could
     // only check its own part).
     let p = &shards[0].params;
-    if p.requested_directions != 0 && p.requested_tiles != 0 && header.file_length > p.max_bytes {
+    if !p.is_automatic() && header.file_length > p.max_bytes {
         return Err(ShardError::OverBudget { length: header.file_length, ceiling: p.max_bytes });
     }
     tmp.commit().map_err(write_err)?;
@@ -537,7 +548,9 @@ fn write_merged(
             leaf = leaf.saturating_add(b.leaf_count).saturating_add(1);
             id = id.saturating_add(b.id_count);
         }
-        let covers = |count: u64, kind| count.checked_mul(4) == Some(s.entry(kind).raw_length);
+        let covers = |count: u64, kind: SectionKind| {
+            count.checked_mul(kind.element_size() as u64) == Some(s.entry(kind).raw_length)
+        };
         if !covers(leaf, SectionKind::LeafBounds) || !covers(id, SectionKind::TriangleIds) {
             return Err(s.corrupt("BEAMS do not cover LEAF_BOUNDS and TRIANGLE_IDS exactly".into()));
         }
@@ -568,4 +581,71 @@ fn write_merged(
     }
     let (_, header) = f.finish(first.header.input_hash).map_err(write_err)?;
     Ok(header)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_shard_spec_is_k_of_n_counted_from_zero() {
+        assert_eq!("0/4".parse(), Ok(ShardSpec { index: 0, count: 4 }));
+        assert_eq!(" 3 / 4 ".parse(), Ok(ShardSpec { index: 3, count: 4 }));
+        assert_eq!("0/1".parse(), Ok(ShardSpec { index: 0, count: 1 }));
+        assert_eq!("65535/65536".parse(), Ok(ShardSpec { index: 65535, count: MAX_SHARDS }));
+        for text in ["0/4", "3/4", "12/65536"] {
+            assert_eq!(text.parse::<ShardSpec>().unwrap().to_string(), text);
+        }
+    }
+
+    #[test]
+    fn bad_shard_specs_are_refused_saying_why() {
+        for (text, says) in [
+            ("4/4", "shard index 4 in `4/4` must be below the count 4 (shards are 0..4)"),
+            ("7/3", "must be below the count 3"),
+            ("0/0", "shard count 0 in `0/0` is outside 1..=65536"),
+            ("0/65537", "shard count 65537 in `0/65537` is outside 1..=65536"),
+            ("1", "`1` is not a shard: write K/N, shard K (counted from 0) of N, e.g. 0/4 … 3/4"),
+            ("a/4", "`a/4` is not a shard"),
+            ("1/b", "`1/b` is not a shard"),
+            ("-1/4", "`-1/4` is not a shard"),
+            ("1/2/3", "`1/2/3` is not a shard"),
+            ("", "`` is not a shard"),
+        ] {
+            let e = text.parse::<ShardSpec>().unwrap_err();
+            assert!(e.contains(says), "`{text}`: {e}");
+        }
+    }
+
+    /// The shards of a split, parsed as `--shard` gives them, hold every direction exactly once, in
+    /// order, their sizes differing by at most one direction; with more shards than directions
+    /// some hold none.
+    #[test]
+    fn the_shards_of_a_split_cover_every_direction_exactly_once() {
+        for l in [1u32, 3, 9, 33, 129, 2049] {
+            for n in [1u32, 2, 3, 4, 5, 7, 64, 4096] {
+                let mut held = vec![0u32; l as usize];
+                let mut next = 0;
+                let mut sizes = Vec::new();
+                for k in 0..n {
+                    let spec: ShardSpec = format!("{k}/{n}").parse().unwrap();
+                    let range = spec.directions(l);
+                    assert_eq!(range.start, next, "shard {spec} of {l} directions does not follow the previous one");
+                    next = range.end;
+                    sizes.push(range.len());
+                    for j in range {
+                        held[j as usize] += 1;
+                    }
+                }
+                assert_eq!(next, l, "{n} shards of {l} directions end early");
+                assert!(held.iter().all(|&c| c == 1), "{n} shards of {l} directions: {held:?}");
+                let (min, max) = (sizes.iter().min().unwrap(), sizes.iter().max().unwrap());
+                assert!(max - min <= 1, "{n} shards of {l} directions: sizes {sizes:?}");
+                assert_eq!(*min == 0, n > l, "{n} shards of {l} directions: sizes {sizes:?}");
+            }
+        }
+        // 33 directions in 4 shards: ⌊33k/4⌋.
+        let ranges: Vec<_> = (0..4).map(|k| ShardSpec { index: k, count: 4 }.directions(33)).collect();
+        assert_eq!(ranges, [0..8, 8..16, 16..24, 24..33]);
+    }
 }

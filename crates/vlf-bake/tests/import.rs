@@ -1,5 +1,7 @@
 //! Integration tests of the OBJ and glTF importers against the meshes in `fixtures/meshes/`.
 
+#![forbid(unsafe_code)]
+
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
 use vlf_bake::import::{import_path, import_paths};

@@ -2,9 +2,11 @@
 //! conservatively, clip to tiles, build the 1D BSPs), reported as triangles per second per
 //! direction. `cargo bench -p vlf-bench --bench bake`.
 
+#![forbid(unsafe_code)]
+
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use std::hint::black_box;
-use vlf_bake::bake::{Scratch, bake_direction};
+use vlf_bake::direction::{Scratch, build_direction};
 use vlf_bake::{DepthPolicy, Params, Prepared};
 use vlf_bench::experiments::paper_scene;
 use vlf_geom::Lattice;
@@ -23,12 +25,12 @@ fn one_direction(c: &mut Criterion) {
             lattice_n: 16,
             tiles,
             depth: DepthPolicy::default(),
-            margin: prep.radius * vlf_bake::bake::MARGIN_FRACTION,
+            margin: prep.radius * vlf_bake::params::MARGIN_FRACTION,
         };
         let m = frame(dirs[dirs.len() / 3]);
         let mut scratch = Scratch::default();
         g.bench_function(format!("{tiles}² tiles"), |b| {
-            b.iter(|| black_box(bake_direction(&prep, &params, &m, 7, &mut scratch).unwrap().ids.len()))
+            b.iter(|| black_box(build_direction(&prep, &params, &m, 7, &mut scratch).unwrap().ids.len()))
         });
     }
     g.finish();

@@ -2,6 +2,8 @@
 //! tiles (a field with one leaf per tile) and over tiles and BSP leaves, the watertight triangle
 //! test, and a whole closest-hit query for reference. `cargo bench -p vlf-bench --bench query`.
 
+#![forbid(unsafe_code)]
+
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use std::hint::black_box;
 use vlf_bake::generate::Rng;

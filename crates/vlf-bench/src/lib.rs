@@ -2,20 +2,25 @@
 //! single-ray CRT kd-tree, both answering the same rays with the same triangle kernel in the same
 //! process, so a ratio measures the acceleration structures and nothing else.
 //!
-//! - [`figure3`]: frame time of a 512×512 image of unshaded primary rays against the number of
-//!   triangles, from outside and from inside, for CRT at its best depth and leaf size (a sweep, as
-//!   the paper did), and the field with linear tiles and with 1D-BSP tiles at 32², 64² and 128².
-//! - [`figure4`]: a walkthrough of the 16K scene, outside to inside: frame time and triangle tests
-//!   per frame for both.
-//! - [`parameters`]: frame time, field size and bake time against directions, tiles and the BSP
-//!   policy for the 100K scene.
+//! - [`experiments::figure3`]: frame time of a 512×512 image of unshaded primary rays against the
+//!   number of triangles, from outside and from inside, for CRT at its best depth and leaf size (a
+//!   sweep, as the paper did), and the field with linear tiles and with 1D-BSP tiles at 32², 64²
+//!   and 128².
+//! - [`experiments::figure4`]: a walkthrough of the 16K scene, outside to inside: frame time and
+//!   triangle tests per frame for both.
+//! - [`experiments::parameters`]: frame time, field size and bake time against directions, tiles
+//!   and the BSP policy for the 100K scene.
 //! - [`first_pixel`]: time to first pixel (open a field and trace one ray, in a new process) for
 //!   fields of any size, with the file in the page cache and evicted from it.
 //!
 //! Frames are traced on one thread (the paper used one processor); every timing is the median of
 //! `repeats` runs after a warm-up run. Bakes use all cores.
 
+// Only `first_pixel` needs `unsafe`: it maps fields and asks the kernel which pages are cached.
+#![deny(unsafe_code)]
+
 pub mod experiments;
+#[allow(unsafe_code)]
 pub mod first_pixel;
 pub mod plot;
 
@@ -25,8 +30,6 @@ use std::time::Instant;
 use vlf_bake::{BakeConfig, NoProgress, Prepared, Scene};
 use vlf_geom::{Hit, Ray};
 use vlf_runtime::Field;
-
-pub use experiments::{figure3, figure4, parameters};
 
 /// Settings shared by all experiments.
 #[derive(Clone, Debug)]
@@ -128,10 +131,10 @@ pub fn bake(scene: &Scene, config: &BakeConfig, work: &Path, name: &str) -> anyh
     let prep = Prepared::new(scene);
     let choice = match vlf_bake::choose(&prep, config) {
         Ok(c) => c,
-        Err(vlf_bake::BakeError::Params(why)) => return Ok(Err(Skipped::OverBudget(why))),
+        Err(vlf_bake::BakeError::Params(why)) => return Ok(Err(Skipped::OverBudget(why.to_string()))),
         Err(e) => return Err(e.into()),
     };
-    let summary = match vlf_bake::bake::bake_to_path(&prep, &choice, &config.request(), &path, &NoProgress) {
+    let summary = match vlf_bake::writer::write_field(&prep, &choice, &config.request(), &path, &NoProgress) {
         Ok(s) => s,
         Err(e @ vlf_bake::BakeError::OverBudget { .. }) => return Ok(Err(Skipped::OverBudget(e.to_string()))),
         Err(e) => return Err(e.into()),

@@ -5,6 +5,8 @@
 //! cargo run --release -p vlf-bench -- figure3 --sizes 1000,16000
 //! ```
 
+#![forbid(unsafe_code)]
+
 use anyhow::Result;
 use clap::{Args, Parser, Subcommand};
 use std::path::PathBuf;
@@ -109,7 +111,7 @@ fn params(s: &Settings, triangles: usize) -> Result<String> {
         DepthPolicy { leaf_size: 4, max_depth: 4 },
         DepthPolicy { leaf_size: 4, max_depth: 12 },
     ];
-    vlf_bench::parameters(s, triangles, &grid, &policies, (513, 128))
+    vlf_bench::experiments::parameters(s, triangles, &grid, &policies, (513, 128))
 }
 
 fn main() -> Result<()> {
@@ -124,8 +126,10 @@ fn main() -> Result<()> {
         verbose: !c.quiet,
     };
     match cli.command {
-        Command::Figure3 { sizes } => println!("{}", vlf_bench::figure3(&s, &sizes)?),
-        Command::Figure4 { triangles, frames } => println!("{}", vlf_bench::figure4(&s, triangles, frames)?),
+        Command::Figure3 { sizes } => println!("{}", vlf_bench::experiments::figure3(&s, &sizes)?),
+        Command::Figure4 { triangles, frames } => {
+            println!("{}", vlf_bench::experiments::figure4(&s, triangles, frames)?)
+        }
         Command::Params { triangles } => println!("{}", params(&s, triangles)?),
         Command::FirstPixel { fields, runs, cold, access, json } => {
             let series = vlf_bench::first_pixel::measure(&fields, &access, runs, cold, s.verbose)?;
@@ -136,8 +140,8 @@ fn main() -> Result<()> {
         }
         Command::FirstPixelChild { field, access } => vlf_bench::first_pixel::child(&field, access)?,
         Command::All => {
-            println!("{}", vlf_bench::figure3(&s, &[1_000, 4_000, 16_000, 64_000, 256_000, 1_000_000])?);
-            println!("{}", vlf_bench::figure4(&s, 16_000, 120)?);
+            println!("{}", vlf_bench::experiments::figure3(&s, &[1_000, 4_000, 16_000, 64_000, 256_000, 1_000_000])?);
+            println!("{}", vlf_bench::experiments::figure4(&s, 16_000, 120)?);
             println!("{}", params(&s, 100_000)?);
         }
     }

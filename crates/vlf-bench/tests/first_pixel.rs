@@ -1,6 +1,8 @@
 //! `vlf-bench first-pixel` end to end: new processes open a field and trace its first ray, warm
 //! and cold, with both ways of opening, and the table reports every series.
 
+#![forbid(unsafe_code)]
+
 use std::path::Path;
 use std::process::Command;
 

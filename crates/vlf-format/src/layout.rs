@@ -1,11 +1,16 @@
-//! The on-disk structs, field by field as in `formats/vlf.md`. Every struct is `#[repr(C)]`,
-//! `Pod`, free of implicit padding (bytemuck's derive refuses padding), and has its size asserted
-//! at compile time, so a cast of file bytes to these types is the spec.
+//! The on-disk structs, field by field as in `formats/vlf.md` (and `formats/vlf-shard.md` for the
+//! SHARD record). Every struct is `#[repr(C)]`, `Pod`, free of implicit padding (bytemuck's derive
+//! refuses padding), and has its size asserted at compile time, so a cast of file bytes to these
+//! types is the spec. Every field says its unit, encoding and sentinels, and the section of the
+//! spec that defines it. Integers and floats are little-endian (§1); lengths and offsets are bytes.
 
 use bytemuck::{Pod, Zeroable};
 
 /// `\x89VLF\r\n\x1a\n`: the PNG trick, catching 7-bit, CR-LF and LF-CR-LF transport damage.
 pub const MAGIC: [u8; 8] = [0x89, b'V', b'L', b'F', b'\r', b'\n', 0x1a, b'\n'];
+/// `\x89VLS\r\n\x1a\n`: the magic of shard files (`formats/vlf-shard.md`), a field's magic with
+/// `F` replaced by `S`, keeping the transfer checks; a field reader refuses it.
+pub const SHARD_MAGIC: [u8; 8] = [0x89, b'V', b'L', b'S', b'\r', b'\n', 0x1a, b'\n'];
 /// The major version this crate reads and writes. A reader refuses any other major.
 pub const VERSION_MAJOR: u16 = 1;
 /// The minor version this crate writes. Readers of the same major accept any minor. Minor 1 added
@@ -37,102 +42,245 @@ pub const LOOKUP_FLIP: u32 = 1 << 31;
 /// A node field that does not apply (OBJ sources).
 pub const NO_INDEX: u32 = u32::MAX;
 
-/// The file header (§3).
+/// DIRECTIONS element (§5.3): the unit direction `(x, y, z, 0)` of a lattice point, computed in
+/// f64 and rounded to f32; `z ≥ 0` (upper hemisphere).
+pub type DirectionRecord = [f32; 4];
+
+/// ROTATIONS element (§5.4): the row-major 3×3 matrix `M_j` whose rows are `t1, t2, ω_j`, an
+/// orthonormal frame with `M_j ω_j = +z`, in f64. Defines the tiling: readers use it as stored.
+pub type RotationRecord = [f64; 9];
+
+/// LOOKUP element (§5.3): `j | (f << 31)`, the index `j` of the stored direction on a lattice
+/// point's line with [`LOOKUP_FLIP`] `f` set when it is the point's antipode; [`LOOKUP_NONE`] for
+/// a cell that is not a lattice point.
+pub type LookupEntry = u32;
+
+/// LEAF_BOUNDS element (§5.6): where a leaf's ids start in TRIANGLE_IDS, relative to its
+/// direction's `id_base`; non-decreasing within a direction, from 0 to the direction's `id_count`.
+pub type LeafBound = u32;
+
+/// TRIANGLE_IDS element (§5.6): the id of a triangle (its index in TRIANGLES); strictly increasing
+/// within a leaf.
+pub type TriangleId = u32;
+
+/// The file header (§3), 128 bytes at offset 0.
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq, Eq)]
 #[repr(C)]
 pub struct Header {
+    /// [`MAGIC`] for a field, [`SHARD_MAGIC`] for a shard.
     pub magic: [u8; 8],
+    /// [`VERSION_MAJOR`]; a reader refuses a major it does not know (§3).
     pub version_major: u16,
+    /// The minor version the writer wrote (§3.4); a reader of the same major accepts any.
     pub version_minor: u16,
+    /// [`HEADER_SIZE`], 128.
     pub header_size: u32,
+    /// Total length of the file in bytes; the last section's stored bytes end here (§2).
     pub file_length: u64,
+    /// Offset of the section table: 128, right after the header.
     pub table_offset: u64,
+    /// Number of section-table entries, at most [`MAX_SECTIONS`].
     pub section_count: u32,
+    /// [`TABLE_ENTRY_SIZE`], 72.
     pub table_entry_size: u32,
+    /// Reserved for flags: 0.
     pub flags: u32,
+    /// 0.
     pub reserved0: u32,
+    /// BLAKE3 of the header and section table with this field taken as zero (§3.1): commits to
+    /// every byte of the file through the sections' `raw_hash`.
     pub content_hash: [u8; 32],
+    /// BLAKE3 of the bake's inputs and request (§3.2): equal inputs, equal hash.
     pub input_hash: [u8; 32],
+    /// 0.
     pub reserved1: [u8; 16],
 }
 
-/// One entry of the section table (§4).
+/// One entry of the section table (§4), 72 bytes; the table starts at offset 128.
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq, Eq)]
 #[repr(C)]
 pub struct SectionEntry {
+    /// Section kind (`crate::SectionKind`, or `crate::SHARD_KIND`); unique within a file.
+    /// Readers skip kinds they do not know.
     pub kind: u32,
+    /// How the bytes are stored: `crate::codec::RAW` (0) or `crate::codec::ZSTD` (1, one zstd
+    /// frame, §8).
     pub codec: u32,
+    /// Start of the stored bytes: a multiple of [`SECTION_ALIGN`], entries strictly increasing.
     pub offset: u64,
+    /// Length of the stored bytes.
     pub stored_length: u64,
+    /// Length after decoding; equals `stored_length` for a raw section, and is at most
+    /// [`MAX_ZSTD_EXPANSION`] times it for a zstd one.
     pub raw_length: u64,
+    /// Size of one element in bytes (`crate::SectionKind::element_size` for a known kind);
+    /// `raw_length` is a multiple of it.
     pub element_size: u32,
+    /// 0.
     pub reserved: u32,
+    /// BLAKE3 of the raw (decoded) bytes.
     pub raw_hash: [u8; 32],
 }
 
-/// The request: parameters as asked for, part of the input hash (§3.3).
+/// The request (§3.3), 32 bytes: the parameters as asked for, before the baker chooses automatic
+/// values. Part of the input hash (§3.2); PARAMS repeats it.
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq, Eq, Default)]
 #[repr(C)]
 pub struct Request {
+    /// Directions asked for (rounded up to a lattice size by the baker); 0 = automatic. Read it
+    /// with [`Request::requested_directions`].
     pub requested_directions: u32,
+    /// Tiles per side asked for; 0 = automatic. Read it with [`Request::requested_tiles`].
     pub requested_tiles: u32,
+    /// Depth policy: target triangles per BSP leaf, ≥ 1 (§6.3).
     pub leaf_size: u32,
+    /// Depth policy: largest BSP depth, at most [`MAX_DEPTH`] (§6.3).
     pub max_depth: u32,
+    /// Bytes: the size budget of automatic parameters, and a ceiling for explicit ones.
     pub max_bytes: u64,
+    /// Bytes per triangle that automatic parameters aim at most at.
     pub max_bytes_per_triangle: u64,
 }
 
-/// SCENE (§5.1): the bounding sphere that normalises the scene.
+/// Decodes "0 means automatic" (§3.3).
+fn requested(value: u32) -> Option<u32> {
+    (value != 0).then_some(value)
+}
+
+impl Request {
+    /// The directions asked for, `None` if automatic.
+    pub fn requested_directions(&self) -> Option<u32> {
+        requested(self.requested_directions)
+    }
+
+    /// The tiles per side asked for, `None` if automatic.
+    pub fn requested_tiles(&self) -> Option<u32> {
+        requested(self.requested_tiles)
+    }
+
+    /// Whether the baker chose the parameters: unless both the directions and the tiles were
+    /// given, it searches for them under the budget.
+    pub fn is_automatic(&self) -> bool {
+        self.requested_directions().is_none() || self.requested_tiles().is_none()
+    }
+}
+
+/// SCENE (§5.1), 128 bytes: the bounding sphere that normalises the scene.
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
 #[repr(C)]
 pub struct SceneRecord {
+    /// Centre `c` of the bounding sphere, world units.
     pub center: [f64; 3],
+    /// Radius `R > 0` of the bounding sphere, world units; every vertex lies inside it. Tiles
+    /// cover `[-R, R]²` around `c`, and the beam coordinate `z` runs over `[-R, R]`.
     pub radius: f64,
+    /// Minimum corner of the vertices' axis-aligned bounding box, world units.
     pub aabb_min: [f64; 3],
+    /// Maximum corner of that box, world units.
     pub aabb_max: [f64; 3],
+    /// `T`, the triangles stored (elements of TRIANGLES), at most 2³² − 1.
     pub triangle_count: u64,
+    /// Elements of SOURCES.
     pub source_count: u32,
+    /// Elements of INPUTS.
     pub input_count: u32,
+    /// Zero-area triangles the importer dropped (not stored).
     pub dropped_degenerate: u64,
+    /// 0.
     pub reserved: [u64; 3],
 }
 
-/// PARAMS (§5.2).
+/// PARAMS (§5.2), 64 bytes: the parameters chosen, and the request they were chosen for.
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
 #[repr(C)]
 pub struct ParamsRecord {
+    /// `N ≥ 1`, segments per edge of the octahedral lattice (§5.3).
     pub lattice_n: u32,
+    /// `l = 2N² + 1`, the directions (elements of DIRECTIONS, ROTATIONS and BEAMS).
     pub direction_count: u32,
+    /// `n ≥ 1`, tiles per side of every direction's grid; tile width `w = 2R / n`.
     pub tile_resolution: u32,
+    /// Depth policy: target triangles per leaf (§6.3).
     pub leaf_size: u32,
+    /// Depth policy: largest BSP depth, at most [`MAX_DEPTH`].
     pub max_depth: u32,
+    /// As in the request: 0 = automatic. Read it with [`ParamsRecord::requested_directions`].
     pub requested_directions: u32,
+    /// As in the request: 0 = automatic. Read it with [`ParamsRecord::requested_tiles`].
     pub requested_tiles: u32,
+    /// 0.
     pub reserved0: u32,
+    /// As in the request, bytes.
     pub max_bytes: u64,
+    /// `μ > 0`, the conservative dilation of footprints and z ranges in world units (§6.2).
     pub margin: f64,
+    /// As in the request, bytes per triangle.
     pub max_bytes_per_triangle: u64,
+    /// 0.
     pub reserved1: u64,
 }
 
-/// BEAMS (§5.5): where one direction's leaves and ids live.
+impl ParamsRecord {
+    /// The request the parameters were chosen for (§3.3).
+    pub fn request(&self) -> Request {
+        Request {
+            requested_directions: self.requested_directions,
+            requested_tiles: self.requested_tiles,
+            leaf_size: self.leaf_size,
+            max_depth: self.max_depth,
+            max_bytes: self.max_bytes,
+            max_bytes_per_triangle: self.max_bytes_per_triangle,
+        }
+    }
+
+    /// The directions asked for, `None` if automatic.
+    pub fn requested_directions(&self) -> Option<u32> {
+        requested(self.requested_directions)
+    }
+
+    /// The tiles per side asked for, `None` if automatic.
+    pub fn requested_tiles(&self) -> Option<u32> {
+        requested(self.requested_tiles)
+    }
+
+    /// Whether the parameters were chosen automatically ([`Request::is_automatic`]).
+    pub fn is_automatic(&self) -> bool {
+        self.request().is_automatic()
+    }
+}
+
+/// BEAMS (§5.5), 32 bytes, one per direction: where the direction's leaves and ids live.
+/// Directions follow each other without gaps, both bases starting at 0.
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq, Eq, Default)]
 #[repr(C)]
 pub struct BeamRecord {
+    /// Index in LEAF_BOUNDS of the direction's first bound; the direction owns `leaf_count + 1`
+    /// bounds from here.
     pub leaf_base: u64,
+    /// Leaves of all the direction's tiles.
     pub leaf_count: u64,
+    /// Index in TRIANGLE_IDS of the direction's first id.
     pub id_base: u64,
+    /// Ids of the direction, at most 2³² − 1.
     pub id_count: u64,
 }
 
-/// TILES (§5.6): one tile's linearised 1D BSP.
+/// TILES (§5.6), 12 bytes, one per tile: the tile's linearised 1D BSP. Tile `(s, t)` of direction
+/// `j` is element `j·n² + t·n + s`.
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq, Eq)]
 #[repr(C)]
 pub struct TileRecord {
+    /// Index of the tile's first leaf within its direction: 0 for the first tile, then the
+    /// previous tile's plus its `2^depth` leaves.
     pub first_leaf: u32,
+    /// Quantised lower end of the tile's z range: `z(q) = −R + q · 2R / Z_LEVELS`
+    /// ([`Z_LEVELS`]); 65535 in an empty tile.
     pub z_lo: u16,
+    /// Quantised upper end; above `z_lo` in a non-empty tile, 0 in an empty one.
     pub z_hi: u16,
+    /// BSP depth `D ≤ max_depth`: the tile has `2^D` leaves; 0 in an empty tile.
     pub depth: u8,
+    /// 0.
     pub reserved: [u8; 3],
 }
 
@@ -149,10 +297,12 @@ impl TileRecord {
     }
 }
 
-/// TRIANGLES (§5.7): three world-space vertices, each padded to four floats.
+/// TRIANGLES (§5.7), 48 bytes: one triangle, in import order (its index is its id).
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
 #[repr(C)]
 pub struct TriangleRecord {
+    /// Its three world-space vertices (node transforms applied), all finite, each `(x, y, z, 0)`:
+    /// padded to four floats.
     pub v: [[f32; 4]; 3],
 }
 
@@ -169,277 +319,241 @@ impl TriangleRecord {
     }
 }
 
-/// PROVENANCE (§5.8): where triangle `i` came from.
+/// PROVENANCE (§5.8), 8 bytes: where triangle `i` came from.
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq, Eq)]
 #[repr(C)]
 pub struct ProvenanceRecord {
+    /// Index into SOURCES.
     pub source: u32,
+    /// The triangle's index within its source, counting every triangle the source produced,
+    /// dropped degenerate ones included.
     pub index: u32,
 }
 
-/// SOURCES (§5.8).
+/// SOURCES (§5.8), 32 bytes: an OBJ object or group, or a glTF mesh primitive instanced by a node.
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq, Eq)]
 #[repr(C)]
 pub struct SourceRecord {
+    /// Index into INPUTS.
     pub input: u32,
+    /// A [`source_kind`] value.
     pub kind: u32,
+    /// Name in STRINGS (byte offset): the OBJ object or group name, the glTF mesh name; may be
+    /// empty.
     pub name_offset: u32,
+    /// Name length in bytes (UTF-8, not NUL-terminated).
     pub name_length: u32,
+    /// OBJ: model index in file order; glTF: mesh index.
     pub mesh: u32,
+    /// glTF: primitive index within the mesh; otherwise 0.
     pub primitive: u32,
+    /// glTF: node index; otherwise [`NO_INDEX`].
     pub node: u32,
+    /// OBJ: material index in the MTL libraries; glTF: material index; [`NO_INDEX`] if none.
     pub material: u32,
 }
 
 /// SOURCES `kind` values.
 pub mod source_kind {
+    /// An OBJ object or group.
     pub const OBJ_OBJECT: u32 = 1;
+    /// A glTF mesh primitive instanced by a node.
     pub const GLTF_PRIMITIVE: u32 = 2;
+    /// Triangles supplied by a program.
     pub const PROGRAM: u32 = 3;
 }
 
-/// INPUTS (§5.8).
+/// INPUTS (§5.8), 48 bytes: one input file.
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq, Eq)]
 #[repr(C)]
 pub struct InputRecord {
+    /// The file's name in STRINGS (byte offset): its final path component only.
     pub name_offset: u32,
+    /// Name length in bytes.
     pub name_length: u32,
+    /// Triangles stored from this input.
     pub triangle_count: u64,
+    /// BLAKE3 of the file's bytes (glTF: the `.gltf` or `.glb` file itself).
     pub file_hash: [u8; 32],
 }
 
-/// MATERIALS (§5.10): one surface of the Whitted model, keyed by (input, index in that input).
-/// Colours are linear RGB.
+/// MATERIALS (§5.10, optional, 1.1), 96 bytes: one surface of the Whitted model, keyed by
+/// (input, index in that input), records sorted by that key. Colours are linear RGB (not sRGB),
+/// nominally in `[0, 1]`; every value is finite and every colour non-negative.
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
 #[repr(C)]
 pub struct MaterialRecord {
+    /// Index into INPUTS: the file whose material list this record belongs to.
     pub input: u32,
+    /// The material's index in that input: the value a SOURCES `material` holds.
     pub index: u32,
+    /// The material's name in STRINGS (byte offset); may be empty.
     pub name_offset: u32,
+    /// Name length in bytes.
     pub name_length: u32,
+    /// Lambert reflectance.
     pub diffuse: [f32; 3],
+    /// Phong exponent, ≥ 0.
     pub shininess: f32,
+    /// Colour of Phong highlights.
     pub specular: [f32; 3],
+    /// Index of refraction of the material's inside, > 0 (1 = no bending).
     pub ior: f32,
+    /// Weight of the mirror-reflected ray.
     pub reflection: [f32; 3],
+    /// 0.
     pub reserved0: u32,
+    /// Weight of the refracted ray.
     pub transmission: [f32; 3],
+    /// 0.
     pub reserved1: u32,
+    /// Light the surface emits itself.
     pub emission: [f32; 3],
+    /// 0.
     pub reserved2: u32,
 }
 
-/// CAMERAS (§5.11): a camera placed by a node, in world space.
+/// CAMERAS (§5.11, optional, 1.1), 88 bytes: a camera placed by a node, in world space, in the
+/// order the importer visits nodes. Angles are radians; distances world units.
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
 #[repr(C)]
 pub struct CameraRecord {
+    /// A [`camera_kind`] value.
     pub kind: u32,
+    /// Index into INPUTS.
     pub input: u32,
+    /// glTF camera index.
     pub camera: u32,
+    /// glTF node index.
     pub node: u32,
+    /// Name in STRINGS (byte offset): the camera's, else the node's, else empty.
     pub name_offset: u32,
+    /// Name length in bytes.
     pub name_length: u32,
+    /// World-space eye point.
     pub position: [f32; 3],
+    /// Unit view direction (the node's −Z axis).
     pub forward: [f32; 3],
+    /// Unit up direction (the node's +Y axis, made orthogonal to `forward`).
     pub up: [f32; 3],
+    /// Perspective: vertical field of view in `(0, π)`; orthographic: 0.
     pub yfov: f32,
+    /// Perspective: width / height, 0 if not given; orthographic: 0.
     pub aspect_ratio: f32,
+    /// Near plane distance, ≥ 0.
     pub znear: f32,
+    /// Far plane distance; 0 = infinite.
     pub zfar: f32,
+    /// Orthographic: half the view's width, > 0; perspective: 0.
     pub xmag: f32,
+    /// Orthographic: half the view's height, > 0; perspective: 0.
     pub ymag: f32,
+    /// 0.
     pub reserved: u32,
 }
 
 /// CAMERAS `kind` values.
 pub mod camera_kind {
+    /// A pinhole camera (`yfov`, `aspect_ratio`).
     pub const PERSPECTIVE: u32 = 1;
+    /// A parallel projection (`xmag`, `ymag`).
     pub const ORTHOGRAPHIC: u32 = 2;
 }
 
-/// LIGHTS (§5.12): a punctual light placed by a node, in world space.
+/// LIGHTS (§5.12, optional, 1.1), 80 bytes: a `KHR_lights_punctual` light placed by a node, in
+/// world space, in node order as for CAMERAS. Angles are radians; distances world units.
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
 #[repr(C)]
 pub struct LightRecord {
+    /// A [`light_kind`] value.
     pub kind: u32,
+    /// Index into INPUTS.
     pub input: u32,
+    /// glTF light index.
     pub light: u32,
+    /// glTF node index.
     pub node: u32,
+    /// Name in STRINGS (byte offset): the light's, else the node's, else empty.
     pub name_offset: u32,
+    /// Name length in bytes.
     pub name_length: u32,
+    /// World-space position (meaningless for directional lights).
     pub position: [f32; 3],
+    /// Unit direction the light travels (the node's −Z axis).
     pub direction: [f32; 3],
+    /// Linear RGB, non-negative.
     pub color: [f32; 3],
+    /// ≥ 0: candela (lm/sr) for point and spot lights, lux (lm/m²) for directional ones.
     pub intensity: f32,
+    /// Distance beyond which the light is cut off; 0 = unlimited.
     pub range: f32,
+    /// Spot: angle from `direction` of full intensity; others: 0.
     pub inner_cone: f32,
+    /// Spot: angle where intensity reaches 0, `inner_cone < outer_cone ≤ π/2`; others: 0.
     pub outer_cone: f32,
+    /// 0.
     pub reserved: u32,
 }
 
 /// LIGHTS `kind` values.
 pub mod light_kind {
+    /// A point light at `position`.
     pub const POINT: u32 = 1;
+    /// A spot light at `position` shining along `direction`.
     pub const SPOT: u32 = 2;
+    /// A light from infinitely far along `direction`.
     pub const DIRECTIONAL: u32 = 3;
 }
 
-/// STATISTICS (§5.9).
+/// STATISTICS (§5.9), 384 bytes: facts the baker computed, so that `dump` prints them without
+/// reading the tiles; a verifying reader recomputes and compares them. Counts over all directions.
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq, Eq)]
 #[repr(C)]
 pub struct StatisticsRecord {
+    /// Tiles: `l·n²`.
     pub tile_count: u64,
+    /// Tiles that hold no triangle.
     pub empty_tiles: u64,
+    /// Σ over tiles of the number of distinct triangles in the tile.
     pub tile_triangle_sum: u64,
+    /// The most distinct triangles in one tile.
     pub max_tile_triangles: u32,
+    /// The deepest BSP of any tile.
     pub max_depth_used: u32,
+    /// Σ `leaf_count_j` of BEAMS.
     pub leaf_count: u64,
+    /// Σ `id_count_j` of BEAMS: ids including duplicates across leaves.
     pub id_count: u64,
+    /// `depth_histogram[D]`: non-empty tiles of depth `D`.
     pub depth_histogram: [u64; 32],
+    /// 0.
     pub reserved: [u64; 10],
 }
 
-/// Section kinds (§5).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
-#[repr(u32)]
-pub enum SectionKind {
-    Scene = 1,
-    Params = 2,
-    Directions = 3,
-    Rotations = 4,
-    Lookup = 5,
-    Beams = 6,
-    Tiles = 7,
-    LeafBounds = 8,
-    TriangleIds = 9,
-    Triangles = 10,
-    Provenance = 11,
-    Sources = 12,
-    Inputs = 13,
-    Strings = 14,
-    Statistics = 15,
-    Materials = 16,
-    Cameras = 17,
-    Lights = 18,
-}
-
-impl SectionKind {
-    /// Every kind this crate knows, in the order the writer lays out the small ones.
-    pub const ALL: [SectionKind; 18] = [
-        SectionKind::Scene,
-        SectionKind::Params,
-        SectionKind::Directions,
-        SectionKind::Rotations,
-        SectionKind::Lookup,
-        SectionKind::Beams,
-        SectionKind::Tiles,
-        SectionKind::LeafBounds,
-        SectionKind::TriangleIds,
-        SectionKind::Triangles,
-        SectionKind::Provenance,
-        SectionKind::Sources,
-        SectionKind::Inputs,
-        SectionKind::Strings,
-        SectionKind::Statistics,
-        SectionKind::Materials,
-        SectionKind::Cameras,
-        SectionKind::Lights,
-    ];
-
-    /// The kinds every version 1 file holds (the kinds of version 1.0).
-    pub const REQUIRED: [SectionKind; 15] = [
-        SectionKind::Scene,
-        SectionKind::Params,
-        SectionKind::Directions,
-        SectionKind::Rotations,
-        SectionKind::Lookup,
-        SectionKind::Beams,
-        SectionKind::Tiles,
-        SectionKind::LeafBounds,
-        SectionKind::TriangleIds,
-        SectionKind::Triangles,
-        SectionKind::Provenance,
-        SectionKind::Sources,
-        SectionKind::Inputs,
-        SectionKind::Strings,
-        SectionKind::Statistics,
-    ];
-
-    /// The kinds added in version 1.1: a file may omit them, which means the same as an empty
-    /// section (a 1.0 file has none).
-    pub const OPTIONAL: [SectionKind; 3] = [SectionKind::Materials, SectionKind::Cameras, SectionKind::Lights];
-
-    /// Whether a version 1 file must hold this kind.
-    pub const fn is_required(self) -> bool {
-        (self as u32) <= SectionKind::Statistics as u32
-    }
-
-    pub fn from_u32(kind: u32) -> Option<SectionKind> {
-        SectionKind::ALL.iter().copied().find(|k| *k as u32 == kind)
-    }
-
-    /// The element size the spec requires.
-    pub const fn element_size(self) -> u32 {
-        match self {
-            SectionKind::Scene => size_of::<SceneRecord>() as u32,
-            SectionKind::Params => size_of::<ParamsRecord>() as u32,
-            SectionKind::Directions => 16,
-            SectionKind::Rotations => 72,
-            SectionKind::Lookup => 4,
-            SectionKind::Beams => size_of::<BeamRecord>() as u32,
-            SectionKind::Tiles => size_of::<TileRecord>() as u32,
-            SectionKind::LeafBounds => 4,
-            SectionKind::TriangleIds => 4,
-            SectionKind::Triangles => size_of::<TriangleRecord>() as u32,
-            SectionKind::Provenance => size_of::<ProvenanceRecord>() as u32,
-            SectionKind::Sources => size_of::<SourceRecord>() as u32,
-            SectionKind::Inputs => size_of::<InputRecord>() as u32,
-            SectionKind::Strings => 1,
-            SectionKind::Statistics => size_of::<StatisticsRecord>() as u32,
-            SectionKind::Materials => size_of::<MaterialRecord>() as u32,
-            SectionKind::Cameras => size_of::<CameraRecord>() as u32,
-            SectionKind::Lights => size_of::<LightRecord>() as u32,
-        }
-    }
-
-    /// The upper-case name used in the spec and in `dump`.
-    pub const fn name(self) -> &'static str {
-        match self {
-            SectionKind::Scene => "SCENE",
-            SectionKind::Params => "PARAMS",
-            SectionKind::Directions => "DIRECTIONS",
-            SectionKind::Rotations => "ROTATIONS",
-            SectionKind::Lookup => "LOOKUP",
-            SectionKind::Beams => "BEAMS",
-            SectionKind::Tiles => "TILES",
-            SectionKind::LeafBounds => "LEAF_BOUNDS",
-            SectionKind::TriangleIds => "TRIANGLE_IDS",
-            SectionKind::Triangles => "TRIANGLES",
-            SectionKind::Provenance => "PROVENANCE",
-            SectionKind::Sources => "SOURCES",
-            SectionKind::Inputs => "INPUTS",
-            SectionKind::Strings => "STRINGS",
-            SectionKind::Statistics => "STATISTICS",
-            SectionKind::Materials => "MATERIALS",
-            SectionKind::Cameras => "CAMERAS",
-            SectionKind::Lights => "LIGHTS",
-        }
-    }
-}
-
-/// Codecs of the section table.
-pub mod codec {
-    pub const RAW: u32 = 0;
-    pub const ZSTD: u32 = 1;
-}
-
-/// Display name of a section kind number, known or not.
-pub fn kind_name(kind: u32) -> String {
-    match SectionKind::from_u32(kind) {
-        Some(k) => k.name().to_string(),
-        None if kind == crate::shard::SHARD_KIND => "SHARD".to_string(),
-        None => format!("unknown kind {kind}"),
-    }
+/// The SHARD record (`formats/vlf-shard.md` §3), 64 bytes: the first section of a shard file (kind
+/// `crate::SHARD_KIND`), saying which directions it holds and of which bake.
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq, Eq)]
+#[repr(C)]
+pub struct ShardRecord {
+    /// `K`, in `0..shard_count`.
+    pub shard_index: u32,
+    /// `N`, in `1..=65536`.
+    pub shard_count: u32,
+    /// `l`, the directions of the whole field; equals PARAMS `direction_count`.
+    pub direction_count: u32,
+    /// `⌊K·l/N⌋`, the shard's first direction.
+    pub first_direction: u32,
+    /// `⌊(K+1)·l/N⌋`, the end of its directions (exclusive).
+    pub end_direction: u32,
+    /// The baker revision that wrote the shard (also hashed into the input hash, §3.2).
+    pub baker_revision: u32,
+    /// Sections of the merged field: the shard's `section_count − 1`.
+    pub field_section_count: u32,
+    /// 0.
+    pub reserved: u32,
+    /// `crate::shard::shared_hash` of the shard's shared sections, which every shard of one bake
+    /// agrees on.
+    pub shared_hash: [u8; 32],
 }
 
 const _: () = {
@@ -458,6 +572,7 @@ const _: () = {
     assert!(size_of::<MaterialRecord>() == 96);
     assert!(size_of::<CameraRecord>() == 88);
     assert!(size_of::<LightRecord>() == 80);
+    assert!(size_of::<ShardRecord>() == 64);
     assert!(std::mem::offset_of!(MaterialRecord, specular) == 32);
     assert!(std::mem::offset_of!(MaterialRecord, emission) == 80);
     assert!(std::mem::offset_of!(CameraRecord, yfov) == 60);

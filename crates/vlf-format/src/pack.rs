@@ -13,6 +13,7 @@
 use crate::error::{FormatError, hex};
 use crate::layout::*;
 use crate::reader::{content_hash, parse_head};
+use crate::section::*;
 use std::io::{self, Read, Seek, SeekFrom};
 
 /// Levels `vlf-bake pack` accepts. The "ultra" levels 20–22 are left out: they need decoder windows

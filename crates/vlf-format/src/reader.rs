@@ -3,6 +3,7 @@
 
 use crate::error::{FormatError, hex};
 use crate::layout::*;
+use crate::section::*;
 use bytemuck::Pod;
 
 /// A validated field: typed views of every section, borrowed from the file bytes.
@@ -366,7 +367,7 @@ pub fn content_hash(header_and_table: &[u8]) -> [u8; 32] {
 
 /// A guess at what damaged or foreign bytes are, for the bad-magic message.
 fn magic_hint(found: &[u8; 8]) -> &'static str {
-    if *found == crate::shard::SHARD_MAGIC {
+    if *found == SHARD_MAGIC {
         " (this is a shard of a sharded bake, `vlf-bake bake --shard`: merge the shards into a field with `vlf-bake merge`)"
     } else if found[1..4] == MAGIC[1..4] {
         if found[0] == MAGIC[0] & 0x7f {

@@ -4,55 +4,12 @@
 //! which directions it holds and of which bake, then come the field's shared sections, then the
 //! per-direction sections restricted to its directions.
 
-use crate::layout::{SectionEntry, SectionKind};
-use bytemuck::{Pod, Zeroable};
+use crate::layout::SectionEntry;
 
-/// `\x89VLS\r\n\x1a\n`: a field's magic with `F` replaced by `S`, keeping the transfer checks.
-pub const SHARD_MAGIC: [u8; 8] = [0x89, b'V', b'L', b'S', b'\r', b'\n', 0x1a, b'\n'];
-
-/// Section kind of the SHARD record; outside the range of field kinds.
-pub const SHARD_KIND: u32 = 0x1_0000;
-
-/// The sections that hold per-direction data. In a shard they hold its directions only (BEAMS
-/// bases relative to its first direction, STATISTICS over its directions); every other section of
-/// a shard is *shared*: byte for byte the section of the merged field.
-pub const PER_DIRECTION_KINDS: [SectionKind; 5] = [
-    SectionKind::Beams,
-    SectionKind::Statistics,
-    SectionKind::Tiles,
-    SectionKind::TriangleIds,
-    SectionKind::LeafBounds,
-];
-
-/// Whether sections of `kind` hold per-direction data ([`PER_DIRECTION_KINDS`]).
-pub fn is_per_direction(kind: u32) -> bool {
-    PER_DIRECTION_KINDS.iter().any(|k| *k as u32 == kind)
-}
-
-/// The SHARD record (`formats/vlf-shard.md` §3), 64 bytes.
-#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq, Eq)]
-#[repr(C)]
-pub struct ShardRecord {
-    /// `K`, in `0..shard_count`.
-    pub shard_index: u32,
-    /// `N ≥ 1`.
-    pub shard_count: u32,
-    /// `l`, the directions of the whole field.
-    pub direction_count: u32,
-    /// `⌊K·l/N⌋`.
-    pub first_direction: u32,
-    /// `⌊(K+1)·l/N⌋` (exclusive).
-    pub end_direction: u32,
-    /// The baker revision that wrote the shard (also hashed into the input hash).
-    pub baker_revision: u32,
-    /// Sections of the merged field: the shard's `section_count − 1`.
-    pub field_section_count: u32,
-    pub reserved: u32,
-    /// [`shared_hash`] of the shard's shared sections.
-    pub shared_hash: [u8; 32],
-}
-
-const _: () = assert!(size_of::<ShardRecord>() == 64);
+// The shard's on-disk constants live with the rest of the layout; re-exported here, where a
+// reader of `formats/vlf-shard.md` looks for them.
+pub use crate::layout::{SHARD_MAGIC, ShardRecord};
+pub use crate::section::{PER_DIRECTION_KINDS, SHARD_KIND, is_per_direction};
 
 /// The directions `⌊K·l/N⌋ .. ⌊(K+1)·l/N⌋` of shard `K` of `N` (`formats/vlf-shard.md` §2):
 /// contiguous, in index order, covering `0..l` exactly once over `K = 0..N`.

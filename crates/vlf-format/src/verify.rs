@@ -7,6 +7,7 @@
 use crate::error::{FormatError, hex};
 use crate::layout::*;
 use crate::reader::FieldReader;
+use crate::section::*;
 
 /// What a successful verification looked at.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]

@@ -13,6 +13,7 @@
 
 use crate::layout::*;
 use crate::reader::content_hash;
+use crate::section::*;
 use std::fs::File;
 use std::io::{self, Read, Write};
 
@@ -73,7 +74,7 @@ impl FieldFile {
     }
 
     /// Starts a file of another type built on the field's container (a shard,
-    /// [`crate::shard::SHARD_MAGIC`]): the same layout with `magic` in the header.
+    /// [`SHARD_MAGIC`]): the same layout with `magic` in the header.
     pub fn create_with_magic(file: File, sections: usize, magic: [u8; 8]) -> io::Result<FieldFile> {
         if sections > MAX_SECTIONS as usize {
             return Err(invalid(format!("{sections} sections exceed the limit of {MAX_SECTIONS}")));

@@ -39,6 +39,7 @@ mod light;
 mod math;
 mod render;
 mod scene;
+pub mod setup;
 mod view;
 
 pub use image::{WorkImage, WorkMetric, decode_png, encode_png, inferno, to_srgb8, work_image};

@@ -3,98 +3,18 @@
 //! bakes sharing a cache directory, cache hits, `cache list/verify/prune`, and `--report`.
 //! (`docs/build-farms.md` describes the features; `formats/vlf-shard.md` the shard files.)
 
+#![forbid(unsafe_code)]
+
+mod common;
+
+use common::{BIN, DOCS, Run, SMALL, command, mesh, names_in, s, spawn, vlf, wait};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Output, Stdio};
+use std::process::{Command, Stdio};
 use vlf_runtime::{Field, hex};
-
-const BIN: &str = env!("CARGO_BIN_EXE_vlf-bake");
-const MESHES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/meshes/");
-
-/// Small explicit parameters: 33 directions × 16² tiles.
-const SMALL: [&str; 4] = ["--directions", "33", "--tiles", "16"];
-
-fn mesh(name: &str) -> PathBuf {
-    Path::new(MESHES).join(name)
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().expect("UTF-8 path")
-}
-
-/// A `vlf-bake` command independent of the caller's environment (threads, cache).
-fn command<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> Command {
-    let mut cmd = Command::new(BIN);
-    cmd.env_remove("RAYON_NUM_THREADS").env_remove("VLF_CACHE_DIR").args(args).stdin(Stdio::null());
-    cmd
-}
-
-struct Run {
-    what: String,
-    code: i32,
-    stdout: String,
-    stderr: String,
-}
-
-impl Run {
-    fn from_output(what: String, out: Output) -> Run {
-        let stdout = String::from_utf8(out.stdout).expect("UTF-8 stdout");
-        let stderr = String::from_utf8(out.stderr).expect("UTF-8 stderr");
-        let Some(code) = out.status.code() else { panic!("`{what}` was killed by a signal\n{stderr}") };
-        assert!(!stderr.contains("panicked") && !stdout.contains("panicked"), "`{what}` panicked:\n{stderr}");
-        Run { what, code, stdout, stderr }
-    }
-
-    fn ok(self) -> Run {
-        assert_eq!(self.code, 0, "`{}` failed:\nstdout: {}\nstderr: {}", self.what, self.stdout, self.stderr);
-        self
-    }
-
-    /// Asserts exit code 1 with one `error:` line on stderr and returns it.
-    fn error(&self) -> &str {
-        assert_eq!(self.code, 1, "`{}`: expected failure\nstdout: {}\nstderr: {}", self.what, self.stdout, self.stderr);
-        let lines: Vec<&str> = self.stderr.lines().collect();
-        assert!(lines.len() == 1 && lines[0].starts_with("error: "), "`{}`: stderr: {}", self.what, self.stderr);
-        lines[0]
-    }
-
-    fn json(&self) -> Value {
-        serde_json::from_str(&self.stdout)
-            .unwrap_or_else(|e| panic!("`{}`: not JSON ({e}): {}", self.what, self.stdout))
-    }
-}
-
-fn describe<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> String {
-    std::iter::once("vlf-bake".to_string())
-        .chain(args.iter().map(|a| a.as_ref().to_string_lossy().into_owned()))
-        .collect::<Vec<_>>()
-        .join(" ")
-}
-
-fn vlf<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> Run {
-    let out = command(args).output().expect("run vlf-bake");
-    Run::from_output(describe(args), out)
-}
-
-/// Starts `vlf-bake ARGS` without waiting.
-fn spawn<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> (String, Child) {
-    let child = command(args).stdout(Stdio::piped()).stderr(Stdio::piped()).spawn().expect("spawn vlf-bake");
-    (describe(args), child)
-}
-
-fn wait((what, child): (String, Child)) -> Run {
-    Run::from_output(what, child.wait_with_output().expect("wait for vlf-bake"))
-}
 
 fn read_json(path: &Path) -> Value {
     serde_json::from_slice(&std::fs::read(path).unwrap()).unwrap()
-}
-
-fn names_in(dir: &Path) -> Vec<String> {
-    let mut names: Vec<String> =
-        std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
-    names.sort();
-    names
 }
 
 /// Bakes shards `0..n` of `inputs` with `params` into `dir/NAME-K.vlfs`, all at once in separate
@@ -149,7 +69,7 @@ fn four_shards_in_four_processes_merge_to_the_single_bake() {
         chosen.push(report["parameters"]["chosen"].clone());
         // A shard is not a field.
         let err = vlf(&["dump", s(shard)]);
-        assert!(err.error().contains("shard"), "{}", err.stderr);
+        assert!(err.one_error_line().contains("shard"), "{}", err.stderr);
     }
     assert!(chosen.windows(2).all(|w| w[0] == w[1]), "shards chose different parameters: {chosen:?}");
     let ranges: Vec<(u64, u64)> = shards
@@ -252,7 +172,7 @@ fn bad_shard_sets_are_refused_naming_the_files() {
     let merged = out.join("merged.vlf");
     for (what, parts, expect) in cases {
         let r = vlf(&merge_args(&parts, &merged));
-        let line = r.error();
+        let line = r.one_error_line();
         for e in expect {
             assert!(line.contains(e), "{what}: the error does not mention {e:?}: {line}");
         }
@@ -293,7 +213,7 @@ fn a_flipped_bit_anywhere_in_a_shard_is_caught() {
     for offset in offsets {
         let bad = flipped(&shards[1], &d.join("bad.vlfs"), offset as usize);
         let r = vlf(&merge_args(&[&shards[0], &bad], &merged));
-        assert!(r.error().contains(s(&bad)), "flip at {offset}: {}", r.stderr);
+        assert!(r.one_error_line().contains(s(&bad)), "flip at {offset}: {}", r.stderr);
         assert!(!merged.exists());
     }
 }
@@ -346,13 +266,15 @@ fn concurrent_bakes_share_a_cache_and_the_next_one_hits() {
     assert_eq!(phases, ["import", "prepare", "cache_key", "cache_lookup"], "a hit bakes nothing");
 
     // VLF_CACHE_DIR is the default; --no-cache turns it off.
-    let env_run = command(&["bake", s(&input), "-o", s(&d.join("env.vlf")), "--json"])
+    let env_run = command()
+        .args(["bake", s(&input), "-o", s(&d.join("env.vlf")), "--json"])
         .args(SMALL)
         .env("VLF_CACHE_DIR", &cache)
         .output()
         .unwrap();
     assert_eq!(Run::from_output("bake with VLF_CACHE_DIR".into(), env_run).ok().json()["cache"], "hit");
-    let off = command(&["bake", s(&input), "-o", s(&d.join("off.vlf")), "--json", "--no-cache"])
+    let off = command()
+        .args(["bake", s(&input), "-o", s(&d.join("off.vlf")), "--json", "--no-cache"])
         .args(SMALL)
         .env("VLF_CACHE_DIR", &cache)
         .output()
@@ -409,7 +331,7 @@ fn damaged_cache_entries_are_caught_and_removed() {
     vlf(&["cache", "verify", "--cache-dir", s(&cache)]).ok();
     flipped(&entry, &entry, good.len() - 200);
     let r = vlf(&["cache", "verify", "--cache-dir", s(&cache)]);
-    assert!(r.error().contains("1 of 1 cache entries failed verification"), "{}", r.stderr);
+    assert!(r.one_error_line().contains("1 of 1 cache entries failed verification"), "{}", r.stderr);
     assert!(r.stdout.contains("removed"), "{}", r.stdout);
     assert!(!entry.exists());
 
@@ -465,7 +387,7 @@ fn cache_list_and_prune() {
     assert_eq!(pruned["removed"], serde_json::json!([keys[2]]), "the least recently used goes");
     assert_eq!(names_in(&cache.join("v1")), [format!("{}.vlf", keys[0])]);
     let r = vlf(&["cache", "prune", "--cache-dir", s(&cache)]);
-    assert!(r.error().contains("--max-size or --max-age"));
+    assert!(r.one_error_line().contains("--max-size or --max-age"));
 }
 
 /// A farm's merged field goes into the cache, where a later plain bake of the same inputs finds it.
@@ -526,8 +448,6 @@ fn the_report_describes_the_bake() {
         assert!(report["peak_memory"]["bytes"].as_u64().unwrap() > 1 << 20, "{report}");
     }
 }
-
-const DOCS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../docs/");
 
 /// The shell scripts of a YAML recipe: every literal block introduced by `run: |` (GitHub
 /// Actions) or `- |` (a Kubernetes container's `args`), without its indentation.
@@ -763,11 +683,11 @@ fn merge_holds_explicit_parameters_to_max_bytes() {
         params[4],
         params[5],
     ]);
-    assert!(single.error().contains("--max-bytes"), "{}", single.stderr);
+    assert!(single.one_error_line().contains("--max-bytes"), "{}", single.stderr);
     let shards = bake_shards(std::slice::from_ref(&input), &params, 2, d, "s");
     let out = d.join("out");
     std::fs::create_dir(&out).unwrap();
     let r = vlf(&merge_args(&[&shards[0], &shards[1]], &out.join("merged.vlf")));
-    assert!(r.error().contains("over the --max-bytes ceiling of 2000000 bytes"), "{}", r.stderr);
+    assert!(r.one_error_line().contains("over the --max-bytes ceiling of 2000000 bytes"), "{}", r.stderr);
     assert!(names_in(&out).is_empty());
 }

@@ -2,21 +2,20 @@
 //! temporary directories, its outputs checked against the formats (`formats/rays.md`) and the
 //! `vlf_runtime` library.
 //!
-//! Every run goes through [`run`], which also asserts that the process was not killed by a signal
-//! and that nothing it printed contains "panicked". Bakes use small explicit parameters
-//! ([`SMALL`]) so each takes a few hundredths of a second.
+//! Every run goes through `common::run`, which also asserts that the process was not killed by a
+//! signal and that nothing it printed contains "panicked". Bakes use small explicit parameters
+//! (`common::SMALL`) so each takes a few hundredths of a second.
 
+#![forbid(unsafe_code)]
+
+mod common;
+
+use common::{Run, SMALL, command, mesh, names_in, run, s, tempdir, vlf};
 use serde_json::{Value, json};
 use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use vlf_runtime::{Field, Hit, Ray, hex};
-
-const BIN: &str = env!("CARGO_BIN_EXE_vlf-bake");
-const MESHES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/meshes/");
-
-/// Small explicit parameters: 33 directions × 16² tiles.
-const SMALL: [&str; 4] = ["--directions", "33", "--tiles", "16"];
 
 const BUNNY_TRIANGLES: u64 = 3674;
 const BOX_TRIANGLES: u64 = 12;
@@ -40,113 +39,17 @@ const SECTION_NAMES: [&str; 15] = [
     "STATISTICS",
 ];
 
-fn mesh(name: &str) -> PathBuf {
-    Path::new(MESHES).join(name)
-}
-
-fn tempdir() -> tempfile::TempDir {
-    tempfile::tempdir().expect("create a temporary directory")
-}
-
-/// What a finished `vlf-bake` process printed, and its exit code.
-#[derive(Debug)]
-struct Run {
-    what: String,
-    code: i32,
-    stdout: String,
-    stderr: String,
-}
-
-impl Run {
-    /// Asserts exit code 0 and returns the run.
-    fn ok(self) -> Run {
-        assert_eq!(self.code, 0, "`{}` failed:\nstdout: {}\nstderr: {}", self.what, self.stdout, self.stderr);
-        self
-    }
-
-    /// Asserts exit code `code` and returns the run.
-    fn fails_with(self, code: i32) -> Run {
-        assert_eq!(
-            self.code, code,
-            "`{}`: wrong exit code\nstdout: {}\nstderr: {}",
-            self.what, self.stdout, self.stderr
-        );
-        self
-    }
-
-    /// Asserts exit code 1 with exactly one line on standard error, starting with `error:`, and
-    /// returns that line.
-    fn one_error_line(&self) -> &str {
-        assert_eq!(
-            self.code, 1,
-            "`{}`: expected exit code 1\nstdout: {}\nstderr: {}",
-            self.what, self.stdout, self.stderr
-        );
-        let lines: Vec<&str> = self.stderr.lines().collect();
-        assert_eq!(lines.len(), 1, "`{}`: expected exactly one line on stderr, got:\n{}", self.what, self.stderr);
-        assert!(
-            lines[0].starts_with("error: "),
-            "`{}`: the error line does not start with `error:`: {}",
-            self.what,
-            lines[0]
-        );
-        lines[0]
-    }
-
-    /// Standard output as one JSON value.
-    fn json(&self) -> Value {
-        serde_json::from_str(&self.stdout)
-            .unwrap_or_else(|e| panic!("`{}`: stdout is not one JSON value ({e}):\n{}", self.what, self.stdout))
-    }
-}
-
-/// Runs a prepared command to completion.
-fn run(cmd: &mut Command) -> Run {
-    let what = std::iter::once("vlf-bake".to_string())
-        .chain(cmd.get_args().map(|a| a.to_string_lossy().into_owned()))
-        .collect::<Vec<_>>()
-        .join(" ");
-    let out = cmd.stdin(Stdio::null()).output().unwrap_or_else(|e| panic!("cannot run `{what}`: {e}"));
-    let stdout = String::from_utf8(out.stdout).expect("stdout is UTF-8");
-    let stderr = String::from_utf8(out.stderr).expect("stderr is UTF-8");
-    let Some(code) = out.status.code() else {
-        panic!("`{what}` was killed by a signal ({})\nstdout: {stdout}\nstderr: {stderr}", out.status)
-    };
-    assert!(
-        !stdout.contains("panicked") && !stderr.contains("panicked"),
-        "`{what}` panicked (exit code {code}):\nstdout: {stdout}\nstderr: {stderr}"
-    );
-    Run { what, code, stdout, stderr }
-}
-
-/// A `vlf-bake` command that does not depend on the caller's thread settings.
-fn command() -> Command {
-    let mut cmd = Command::new(BIN);
-    cmd.env_remove("RAYON_NUM_THREADS");
-    cmd
-}
-
-/// Runs `vlf-bake ARGS...`.
-fn vlf<S: AsRef<OsStr>>(args: &[S]) -> Run {
-    run(command().args(args))
-}
-
 /// Runs `vlf-bake bake INPUTS... -o OUTPUT --directions 33 --tiles 16 EXTRA...`.
 fn bake(inputs: &[&Path], output: &Path, extra: &[&str]) -> Run {
     run(command().arg("bake").args(inputs).arg("-o").arg(output).args(SMALL).args(extra))
 }
 
-/// Bakes the bunny with [`SMALL`] parameters into `dir/name`.
+/// Bakes the bunny with `SMALL` parameters into `dir/name`.
 fn bake_bunny(dir: &Path, name: &str) -> PathBuf {
     let field = dir.join(name);
     let r = bake(&[&mesh("bunny.obj")], &field, &["--quiet"]).ok();
     assert_eq!((r.stdout.as_str(), r.stderr.as_str()), ("", ""));
     field
-}
-
-/// A path as a string argument (temporary directories and fixtures have UTF-8 paths).
-fn s(p: &Path) -> &str {
-    p.to_str().expect("UTF-8 path")
 }
 
 /// `dump --json` of a field.
@@ -164,14 +67,6 @@ fn section_span(field: &Path, name: &str) -> (u64, u64) {
         .find(|e| e["name"] == name)
         .unwrap_or_else(|| panic!("no section {name} in dump --json"));
     (section["offset"].as_u64().unwrap(), section["stored_length"].as_u64().unwrap())
-}
-
-/// The names in a directory, sorted.
-fn names_in(dir: &Path) -> Vec<String> {
-    let mut names: Vec<String> =
-        std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
-    names.sort();
-    names
 }
 
 /// Asserts that no temporary file (`.NAME.XXXX.tmp`) was left in `dir`.

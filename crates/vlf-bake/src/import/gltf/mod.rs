@@ -20,24 +20,22 @@
 //! itself (naming a missing file), and checks every accessor it reads against its buffer view and
 //! buffer before handing it to the reader.
 
+mod accessor;
+mod records;
+mod transform;
+
 use crate::scene::{ImportError, MaterialDesc, SceneBuilder, SourceDesc};
 use ::gltf as gl;
+use accessor::check_layout;
 use gl::accessor::{DataType, Dimensions};
 use gl::json::validation::Validate;
 use gl::mesh::Mode;
+use records::{camera_record, light_record};
 use serde_json::Value;
 use std::borrow::Cow;
 use std::path::{Path, PathBuf};
-use vlf_format::{CameraRecord, LightRecord, NO_INDEX, camera_kind, light_kind, source_kind};
-
-/// Column-major 4×4 matrix, `m[column][row]`, like glTF.
-type Mat4 = [[f64; 4]; 4];
-
-const IDENTITY: Mat4 = [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]];
-
-/// A sparse accessor without a buffer view expands `count` zeros from a few bytes; refuse counts
-/// beyond this rather than allocate whatever a hostile file asks for.
-const SPARSE_ONLY_MAX_COUNT: usize = 1 << 24;
+use transform::{IDENTITY, Mat4, local_matrix, mul, transform_point};
+use vlf_format::{NO_INDEX, source_kind};
 
 /// Whether a required extension leaves geometry alone (materials, textures, lights, metadata), so
 /// that the triangles can be imported without understanding it.
@@ -477,110 +475,6 @@ fn normalized(v: [f64; 3]) -> Option<[f64; 3]> {
     (len.is_finite() && len > 1e-12).then(|| v.map(|c| c / len))
 }
 
-/// The CAMERAS record of a camera (names are filled in by the builder), or `None` if its
-/// parameters are outside glTF's ranges.
-fn camera_record(
-    camera: &gl::json::camera::Camera,
-    camera_index: u32,
-    node: u32,
-    position: [f64; 3],
-    forward: [f64; 3],
-    up: [f64; 3],
-    input: u32,
-) -> Option<CameraRecord> {
-    use gl::json::camera::Type;
-    use gl::json::validation::Checked;
-    let ok = |v: f32| v.is_finite() && v >= 0.0;
-    let mut record = CameraRecord {
-        kind: 0,
-        input,
-        camera: camera_index,
-        node,
-        name_offset: 0,
-        name_length: 0,
-        position: position.map(|c| c as f32),
-        forward: forward.map(|c| c as f32),
-        up: up.map(|c| c as f32),
-        yfov: 0.0,
-        aspect_ratio: 0.0,
-        znear: 0.0,
-        zfar: 0.0,
-        xmag: 0.0,
-        ymag: 0.0,
-        reserved: 0,
-    };
-    match camera.type_ {
-        Checked::Valid(Type::Perspective) => {
-            let p = camera.perspective.as_ref()?;
-            let (aspect, zfar) = (p.aspect_ratio.unwrap_or(0.0), p.zfar.unwrap_or(0.0));
-            if !(p.yfov > 0.0 && p.yfov < std::f32::consts::PI && ok(aspect) && ok(p.znear) && ok(zfar)) {
-                return None;
-            }
-            record.kind = camera_kind::PERSPECTIVE;
-            (record.yfov, record.aspect_ratio, record.znear, record.zfar) = (p.yfov, aspect, p.znear, zfar);
-        }
-        Checked::Valid(Type::Orthographic) => {
-            let o = camera.orthographic.as_ref()?;
-            let (xmag, ymag) = (o.xmag.abs(), o.ymag.abs());
-            if !(xmag > 0.0 && ymag > 0.0 && xmag.is_finite() && ymag.is_finite() && ok(o.znear) && ok(o.zfar)) {
-                return None;
-            }
-            record.kind = camera_kind::ORTHOGRAPHIC;
-            (record.xmag, record.ymag, record.znear, record.zfar) = (xmag, ymag, o.znear, o.zfar);
-        }
-        Checked::Invalid => return None,
-    }
-    Some(record)
-}
-
-/// The LIGHTS record of a `KHR_lights_punctual` light, or `None` if its parameters are outside
-/// the extension's ranges.
-fn light_record(
-    light: &gl::json::extensions::scene::khr_lights_punctual::Light,
-    light_index: u32,
-    node: u32,
-    position: [f64; 3],
-    direction: [f64; 3],
-    input: u32,
-) -> Option<LightRecord> {
-    use gl::json::extensions::scene::khr_lights_punctual::Type;
-    use gl::json::validation::Checked;
-    let ok = |v: f32| v.is_finite() && v >= 0.0;
-    let range = light.range.unwrap_or(0.0);
-    if !(light.color.iter().all(|&c| ok(c)) && ok(light.intensity) && ok(range)) {
-        return None;
-    }
-    let (kind, inner, outer) = match light.type_ {
-        Checked::Valid(Type::Point) => (light_kind::POINT, 0.0, 0.0),
-        Checked::Valid(Type::Directional) => (light_kind::DIRECTIONAL, 0.0, 0.0),
-        Checked::Valid(Type::Spot) => {
-            let spot = light.spot.as_ref()?;
-            let (inner, outer) = (spot.inner_cone_angle, spot.outer_cone_angle);
-            if !(inner >= 0.0 && inner < outer && outer <= std::f32::consts::FRAC_PI_2) {
-                return None;
-            }
-            (light_kind::SPOT, inner, outer)
-        }
-        Checked::Invalid => return None,
-    };
-    Some(LightRecord {
-        kind,
-        input,
-        light: light_index,
-        node,
-        name_offset: 0,
-        name_length: 0,
-        position: position.map(|c| c as f32),
-        direction: direction.map(|c| c as f32),
-        color: light.color,
-        intensity: light.intensity,
-        range,
-        inner_cone: inner,
-        outer_cone: outer,
-        reserved: 0,
-    })
-}
-
 /// Imports one primitive instanced by node `node`.
 fn import_primitive(
     builder: &mut SceneBuilder,
@@ -696,113 +590,4 @@ fn import_primitive(
         builder.push_triangle(source, t as u64, corners.map(vertex))?;
     }
     Ok(())
-}
-
-/// Checks that every byte the reader will touch for `accessor` (elements of `element_size` bytes,
-/// plus sparse indices and values) lies inside its buffer view and buffer, with no arithmetic
-/// overflow, so that the crate's unchecked reader cannot panic or misread.
-fn check_layout(accessor: &gl::Accessor, element_size: usize, buffers: &[Vec<u8>]) -> Result<(), String> {
-    let count = accessor.count();
-    match accessor.view() {
-        Some(view) => check_run(&view, accessor.offset(), count, element_size, buffers)?,
-        None if accessor.sparse().is_none() => return Err("it has neither a buffer view nor sparse values".to_string()),
-        None if count > SPARSE_ONLY_MAX_COUNT => {
-            return Err(format!(
-                "a sparse accessor without a buffer view may hold at most {SPARSE_ONLY_MAX_COUNT} elements, not {count}"
-            ));
-        }
-        None => {}
-    }
-    if let Some(sparse) = accessor.sparse() {
-        let n = sparse.count();
-        if n == 0 || n > count {
-            return Err(format!("sparse count {n} must be between 1 and the accessor count {count}"));
-        }
-        let indices = sparse.indices();
-        check_run(&indices.view(), indices.offset(), n, indices.index_type().size(), buffers)
-            .map_err(|why| format!("sparse indices: {why}"))?;
-        let values = sparse.values();
-        check_run(&values.view(), values.offset(), n, element_size, buffers)
-            .map_err(|why| format!("sparse values: {why}"))?;
-    }
-    Ok(())
-}
-
-/// Checks `count` elements of `size` bytes from `offset` in `view` (with its stride).
-fn check_run(
-    view: &gl::buffer::View,
-    offset: usize,
-    count: usize,
-    size: usize,
-    buffers: &[Vec<u8>],
-) -> Result<(), String> {
-    let (v, b) = (view.index(), view.buffer().index());
-    let buffer_len = buffers.get(b).map_or(0, Vec::len);
-    let view_end = view.offset().checked_add(view.length());
-    if view_end.is_none_or(|end| end > buffer_len) {
-        return Err(format!(
-            "buffer view {v} (offset {}, length {}) lies outside buffer {b} ({buffer_len} bytes)",
-            view.offset(),
-            view.length()
-        ));
-    }
-    let stride = view.stride().unwrap_or(size);
-    if stride < size {
-        return Err(format!("buffer view {v} has byteStride {stride}, less than the element size {size}"));
-    }
-    if count == 0 {
-        return Ok(());
-    }
-    let end = stride.checked_mul(count - 1).and_then(|x| x.checked_add(size)).and_then(|x| x.checked_add(offset));
-    if end.is_none_or(|end| end > view.length()) {
-        return Err(format!(
-            "{count} elements of {size} bytes from byte {offset}, stride {stride}, overrun buffer view {v} ({} B)",
-            view.length()
-        ));
-    }
-    Ok(())
-}
-
-/// A node's local transform as a column-major f64 matrix; a TRS transform is composed in f64
-/// (`T·R·S`, the quaternion used as given).
-fn local_matrix(transform: gl::scene::Transform) -> Mat4 {
-    match transform {
-        gl::scene::Transform::Matrix { matrix } => matrix.map(|column| column.map(f64::from)),
-        gl::scene::Transform::Decomposed { translation, rotation, scale } => {
-            let [x, y, z, w] = rotation.map(f64::from);
-            let [sx, sy, sz] = scale.map(f64::from);
-            let [tx, ty, tz] = translation.map(f64::from);
-            // Rotation matrix, row-major r[row][column].
-            let r = [
-                [1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y - z * w), 2.0 * (x * z + y * w)],
-                [2.0 * (x * y + z * w), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z - x * w)],
-                [2.0 * (x * z - y * w), 2.0 * (y * z + x * w), 1.0 - 2.0 * (x * x + y * y)],
-            ];
-            let s = [sx, sy, sz];
-            let mut m = IDENTITY;
-            for (column, m_column) in m.iter_mut().take(3).enumerate() {
-                for row in 0..3 {
-                    m_column[row] = r[row][column] * s[column];
-                }
-            }
-            m[3] = [tx, ty, tz, 1.0];
-            m
-        }
-    }
-}
-
-/// `a · b` for column-major matrices.
-fn mul(a: &Mat4, b: &Mat4) -> Mat4 {
-    std::array::from_fn(|column| std::array::from_fn(|row| (0..4).map(|k| a[k][row] * b[column][k]).sum()))
-}
-
-/// The affine image of `p` under `m`, computed in f64 and rounded to f32. A point with a
-/// non-finite coordinate is returned as it is, so that the error names the value in the file (a
-/// NaN would otherwise spread to every coordinate).
-fn transform_point(m: &Mat4, p: [f32; 3]) -> [f32; 3] {
-    if !p.iter().all(|c| c.is_finite()) {
-        return p;
-    }
-    let [x, y, z] = p.map(f64::from);
-    std::array::from_fn(|row| (m[0][row] * x + m[1][row] * y + m[2][row] * z + m[3][row]) as f32)
 }

@@ -10,6 +10,11 @@
 //!   directory, a directory as output) leaves the previous field and no temporary file;
 //! - a field kept mapped while a bake renames a new one over its path keeps answering as before.
 
+#![forbid(unsafe_code)]
+
+mod common;
+
+use common::{BIN, MESHES, Run, command, mesh, names_in, run, s, tempdir, vlf};
 use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
@@ -17,87 +22,17 @@ use std::time::{Duration, Instant, SystemTime};
 use vlf_geom::{Camera, Hit, Ray};
 use vlf_runtime::Field;
 
-const BIN: &str = env!("CARGO_BIN_EXE_vlf-bake");
-const MESHES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/meshes");
 const DOC: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../docs/reliability.md");
-
-/// How a `vlf-bake` process ended.
-#[derive(Debug)]
-struct Run {
-    what: String,
-    code: Option<i32>,
-    stdout: String,
-    stderr: String,
-}
-
-impl Run {
-    fn ok(self) -> Run {
-        assert_eq!(self.code, Some(0), "`{}` failed: {}", self.what, self.stderr);
-        self
-    }
-
-    /// Asserts exit code 1 and one `error:` line on standard error that contains every phrase.
-    fn fails_saying(&self, phrases: &[&str]) -> &str {
-        assert_eq!(self.code, Some(1), "`{}`: expected exit code 1: {self:?}", self.what);
-        let lines: Vec<&str> = self.stderr.lines().collect();
-        assert!(
-            lines.len() == 1 && lines[0].starts_with("error: "),
-            "`{}`: not one error line: {}",
-            self.what,
-            self.stderr
-        );
-        for phrase in phrases {
-            assert!(lines[0].contains(phrase), "`{}`: the error does not say `{phrase}`: {}", self.what, lines[0]);
-        }
-        lines[0]
-    }
-}
-
-/// Runs a command to completion; fails the test if it panicked.
-fn run(cmd: &mut Command) -> Run {
-    let what = cmd.get_args().map(|a| a.to_string_lossy().into_owned()).collect::<Vec<_>>().join(" ");
-    let out = cmd.stdin(Stdio::null()).output().unwrap_or_else(|e| panic!("cannot run `{what}`: {e}"));
-    let (stdout, stderr) =
-        (String::from_utf8_lossy(&out.stdout).into_owned(), String::from_utf8_lossy(&out.stderr).into_owned());
-    assert!(!stderr.contains("panicked"), "`{what}` panicked: {stderr}");
-    Run { what, code: out.status.code(), stdout, stderr }
-}
-
-fn vlf() -> Command {
-    let mut cmd = Command::new(BIN);
-    cmd.env_remove("RAYON_NUM_THREADS");
-    cmd
-}
-
-fn vlf_run<S: AsRef<OsStr>>(args: &[S]) -> Run {
-    run(vlf().args(args))
-}
-
-fn mesh(name: &str) -> PathBuf {
-    Path::new(MESHES).join(name)
-}
-
-fn tempdir() -> tempfile::TempDir {
-    tempfile::tempdir().expect("a temporary directory")
-}
 
 /// `vlf-bake bake INPUT -o OUTPUT --directions 33 --tiles 16 --quiet EXTRA...`.
 fn bake(input: &Path, output: &Path, extra: &[&str]) -> Run {
-    run(vlf()
+    run(command()
         .arg("bake")
         .arg(input)
         .arg("-o")
         .arg(output)
         .args(["--directions", "33", "--tiles", "16", "--quiet"])
         .args(extra))
-}
-
-/// The names in a directory, sorted.
-fn names_in(dir: &Path) -> Vec<String> {
-    let mut names: Vec<String> =
-        std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
-    names.sort();
-    names
 }
 
 /// The temporary files of writes of `dir/NAME`: `.NAME.XXXXXX.tmp`.
@@ -157,13 +92,13 @@ fn bad_meshes_get_exactly_the_errors_and_warnings_the_docs_table_lists() {
     let out = dir.path().join("out.vlf");
     for row in &rows {
         // Paths relative to fixtures/meshes, as the table shows them.
-        let r = run(vlf().current_dir(MESHES).args(["bake", &row.input, "-o"]).arg(&out).args([
+        let r = run(command().current_dir(MESHES).args(["bake", &row.input, "-o"]).arg(&out).args([
             "--directions",
             "3",
             "--tiles",
             "2",
         ]));
-        assert_eq!(r.code, Some(row.exit), "{}: exit code\n{}", row.input, r.stderr);
+        assert_eq!(r.code, row.exit, "{}: exit code\n{}", row.input, r.stderr);
         assert_eq!(r.stderr.lines().collect::<Vec<_>>(), row.stderr, "{}: standard error", row.input);
         if row.exit == 0 {
             Field::open(&out).unwrap();
@@ -185,14 +120,19 @@ fn bad_meshes_get_exactly_the_errors_and_warnings_the_docs_table_lists() {
 fn dump_verify_names_the_damage_in_a_sample_of_damaged_fields() {
     let dir = tempdir();
     let good = dir.path().join("good.vlf");
-    run(vlf().arg("bake").arg(mesh("Box.gltf")).arg("-o").arg(&good).args(["--directions", "3", "--tiles", "2", "-q"]))
-        .ok();
-    let verified = vlf_run(&[OsStr::new("dump"), good.as_os_str(), OsStr::new("--verify")]).ok();
+    run(command().arg("bake").arg(mesh("Box.gltf")).arg("-o").arg(&good).args([
+        "--directions",
+        "3",
+        "--tiles",
+        "2",
+        "-q",
+    ]))
+    .ok();
+    let verified = vlf(&[OsStr::new("dump"), good.as_os_str(), OsStr::new("--verify")]).ok();
     assert!(verified.stdout.contains("verify: OK"), "{}", verified.stdout);
 
     let info: serde_json::Value =
-        serde_json::from_str(&vlf_run(&[OsStr::new("dump"), good.as_os_str(), OsStr::new("--json")]).ok().stdout)
-            .unwrap();
+        serde_json::from_str(&vlf(&[OsStr::new("dump"), good.as_os_str(), OsStr::new("--json")]).ok().stdout).unwrap();
     let sections: Vec<(String, u64, u64)> = info["sections"]
         .as_array()
         .unwrap()
@@ -233,7 +173,7 @@ fn dump_verify_names_the_damage_in_a_sample_of_damaged_fields() {
         let mut damaged = bytes.clone();
         damaged[at as usize] ^= 0x01;
         std::fs::write(&bad, &damaged).unwrap();
-        let r = vlf_run(&[OsStr::new("dump"), bad.as_os_str(), OsStr::new("--verify")]);
+        let r = vlf(&[OsStr::new("dump"), bad.as_os_str(), OsStr::new("--verify")]);
         r.fails_saying(&["bad.vlf", &phrase]);
         assert!(!r.stdout.contains("verify: OK"), "{}", r.stdout);
     }
@@ -241,6 +181,13 @@ fn dump_verify_names_the_damage_in_a_sample_of_damaged_fields() {
 
 // ---------------------------------------------------------------------------------------------
 // Crash safety
+
+/// `vlf-bake gen random --count COUNT -o DIR/random.obj`: the scene's path.
+fn random_scene(dir: &Path, count: u32) -> PathBuf {
+    let scene = dir.join("random.obj");
+    vlf(&["gen", "random", "--count", &count.to_string(), "-o", s(&scene)]).ok();
+    scene
+}
 
 /// Pretends a file was last modified `age` ago.
 fn age(path: &Path, age: Duration) {
@@ -258,17 +205,8 @@ fn a_bake_killed_midway_leaves_the_previous_field_intact_and_its_temporary_file_
     let previous = std::fs::read(&out).unwrap();
 
     // A bake that writes a few hundred MiB, killed once its temporary file holds 16 MiB.
-    let scene = dir.path().join("random.obj");
-    vlf_run(&[
-        OsStr::new("gen"),
-        OsStr::new("random"),
-        OsStr::new("--count"),
-        OsStr::new("20000"),
-        OsStr::new("-o"),
-        scene.as_os_str(),
-    ])
-    .ok();
-    let mut child = vlf()
+    let scene = random_scene(dir.path(), 20000);
+    let mut child = command()
         .arg("bake")
         .arg(&scene)
         .arg("-o")
@@ -298,7 +236,7 @@ fn a_bake_killed_midway_leaves_the_previous_field_intact_and_its_temporary_file_
     // The path holds the previous field, byte for byte, and it opens and verifies.
     assert!(std::fs::read(&out).unwrap() == previous, "the previous field changed");
     Field::open(&out).unwrap();
-    vlf_run(&[OsStr::new("dump"), out.as_os_str(), OsStr::new("--verify")]).ok();
+    vlf(&[OsStr::new("dump"), out.as_os_str(), OsStr::new("--verify")]).ok();
     // Left behind: the temporary file, by its name, and nothing else (spill files are anonymous).
     let temp_name = temp.file_name().unwrap().to_str().unwrap().to_string();
     assert_eq!(names_in(dir.path()), [temp_name.as_str(), "random.obj", "scene.vlf"]);
@@ -341,7 +279,7 @@ fn failed_bakes_leave_the_previous_field_and_no_temporary_files() {
         ("a bad mesh", bake(&mesh("bad/nan_vertex.obj"), &out, &[]), vec!["nan_vertex.obj", "non-finite"]),
         (
             "a bad mesh after a good one",
-            run(vlf()
+            run(command()
                 .arg("bake")
                 .arg(&bunny)
                 .arg(mesh("bad/degenerate.gltf"))
@@ -404,7 +342,7 @@ fn an_unwritable_output_directory_is_an_error_and_is_left_as_it_was() {
     let previous = std::fs::read(&out).unwrap();
     std::fs::set_permissions(&locked, std::fs::Permissions::from_mode(0o555)).unwrap();
 
-    let mut cmd = vlf();
+    let mut cmd = command();
     cmd.arg("bake").arg(mesh("bunny.obj")).arg("-o").arg(&out).args(["--directions", "33", "--tiles", "16"]);
     // Root writes anywhere: bake as `nobody` instead.
     if my_uid(dir.path()) == 0 {
@@ -439,17 +377,8 @@ fn a_mapped_field_keeps_answering_as_before_while_a_bake_renames_a_new_one_over_
     assert!(before.iter().filter(|h| h.is_some()).count() > 1000);
 
     // Another scene is baked over the path while this process keeps querying the old mapping.
-    let scene = dir.path().join("random.obj");
-    vlf_run(&[
-        OsStr::new("gen"),
-        OsStr::new("random"),
-        OsStr::new("--count"),
-        OsStr::new("5000"),
-        OsStr::new("-o"),
-        scene.as_os_str(),
-    ])
-    .ok();
-    let mut child = vlf()
+    let scene = random_scene(dir.path(), 5000);
+    let mut child = command()
         .arg("bake")
         .arg(&scene)
         .arg("-o")

@@ -1,7 +1,10 @@
 //! What `vlf-bake dump` shows: a description of a field read from its header, table and small
-//! sections only (instant on any size), and the full verification behind `--verify`.
+//! sections only (instant on any size), and the full verification behind `--verify`; [`text`]
+//! writes a description out as `dump` prints it.
 
-use crate::bake::Statistics;
+pub mod text;
+
+use crate::statistics::Statistics;
 use serde::Serialize;
 use vlf_format::pack::PackedLayout;
 use vlf_format::{FieldReader, FormatError, SectionKind, codec, hex, kind_name};
@@ -105,8 +108,8 @@ pub fn describe(r: &FieldReader<'_>) -> Description {
         tile_resolution: p.tile_resolution,
         leaf_size: p.leaf_size,
         max_depth: p.max_depth,
-        requested_directions: (p.requested_directions != 0).then_some(p.requested_directions),
-        requested_tiles: (p.requested_tiles != 0).then_some(p.requested_tiles),
+        requested_directions: p.requested_directions(),
+        requested_tiles: p.requested_tiles(),
         max_bytes: p.max_bytes,
         max_bytes_per_triangle: p.max_bytes_per_triangle,
         margin: p.margin,

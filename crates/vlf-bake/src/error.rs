@@ -1,0 +1,26 @@
+//! Why a bake failed: [`BakeError`], one variant per fault, each naming what it is about.
+
+use crate::params::ParamsError;
+use std::io;
+use std::path::PathBuf;
+
+/// Why a bake failed.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum BakeError {
+    #[error("cannot write {path}: {error}")]
+    Io { path: PathBuf, error: io::Error },
+    /// The parameters asked for are out of range, or cannot fit the size budget.
+    #[error(transparent)]
+    Params(#[from] ParamsError),
+    #[error(
+        "direction {direction} needs {count} {what}, more than the format's 2^32 - 1 per direction; lower --tiles or the scene size"
+    )]
+    DirectionTooLarge { direction: usize, count: u64, what: &'static str },
+    /// Explicit parameters produced more bytes than `--max-bytes` allows; the bake stopped as soon
+    /// as it knew, and removed what it had written.
+    #[error(
+        "the field outgrew the --max-bytes ceiling of {ceiling} bytes ({at_least} bytes or more after {baked} of {directions} directions); lower --directions or --tiles, or raise --max-bytes"
+    )]
+    OverBudget { ceiling: u64, at_least: u64, baked: usize, directions: usize },
+}

@@ -1,0 +1,154 @@
+//! The sections every file of a bake shares (`formats/vlf-shard.md`): the scene's and the
+//! parameters' sections, and the input hash that identifies the bake (`formats/vlf.md` §3.2).
+//!
+//! **What the input hash covers** ([`input_hash`]): the format's major version, [`BAKER_REVISION`],
+//! the request, and the raw bytes of TRIANGLES, PROVENANCE, SOURCES, INPUTS, STRINGS, MATERIALS,
+//! CAMERAS and LIGHTS. Changing what it covers, or the baker's output for the same inputs, is a
+//! baker revision bump (and, for the covered list, a format change in `formats/vlf.md`).
+
+use crate::params::Params;
+use crate::prepare::Prepared;
+use crate::scene::Scene;
+use std::borrow::Cow;
+use vlf_format::{ParamsRecord, Request, SceneRecord, SectionEntry, SectionKind, VERSION_MAJOR};
+use vlf_geom::Lattice;
+use vlf_geom::frame::frame;
+
+/// Bumped whenever the baker's output for the same inputs and request changes (part of the input
+/// hash, `formats/vlf.md` §3.2). Revision 2 (format 1.1) adds the MATERIALS, CAMERAS and LIGHTS
+/// sections, and with them what an OBJ's `.mtl` files hold, to the input hash.
+pub const BAKER_REVISION: u32 = 2;
+
+/// The input hash of `formats/vlf.md` §3.2.
+pub fn input_hash(scene: &Scene, request: &Request) -> [u8; 32] {
+    let mut h = blake3::Hasher::new();
+    h.update(b"VLF-INPUT\0");
+    h.update(&VERSION_MAJOR.to_le_bytes());
+    h.update(&BAKER_REVISION.to_le_bytes());
+    h.update(bytemuck::bytes_of(request));
+    for (_, bytes) in input_sections(scene) {
+        h.update(&(bytes.len() as u64).to_le_bytes());
+        h.update(bytes);
+    }
+    *h.finalize().as_bytes()
+}
+
+/// Raw bytes of TRIANGLES, PROVENANCE, SOURCES, INPUTS, STRINGS, MATERIALS, CAMERAS, LIGHTS, in
+/// that order: what the input hash covers (the last three are empty when the inputs define none).
+fn input_sections(scene: &Scene) -> [(SectionKind, &[u8]); 8] {
+    [
+        (SectionKind::Triangles, bytemuck::cast_slice(&scene.triangles)),
+        (SectionKind::Provenance, bytemuck::cast_slice(&scene.provenance)),
+        (SectionKind::Sources, bytemuck::cast_slice(&scene.sources)),
+        (SectionKind::Inputs, bytemuck::cast_slice(&scene.inputs)),
+        (SectionKind::Strings, &scene.strings),
+        (SectionKind::Materials, bytemuck::cast_slice(&scene.materials)),
+        (SectionKind::Cameras, bytemuck::cast_slice(&scene.cameras)),
+        (SectionKind::Lights, bytemuck::cast_slice(&scene.lights)),
+    ]
+}
+
+/// A section that every file of a bake holds whole: a field, and each of its shards
+/// (`formats/vlf-shard.md`), byte for byte.
+pub struct SharedSection<'a> {
+    pub kind: u32,
+    pub element_size: u32,
+    pub bytes: Cow<'a, [u8]>,
+}
+
+impl<'a> SharedSection<'a> {
+    fn new(kind: SectionKind, bytes: impl Into<Cow<'a, [u8]>>) -> Self {
+        SharedSection { kind: kind as u32, element_size: kind.element_size(), bytes: bytes.into() }
+    }
+
+    /// The table entry this section gets, but for its offset.
+    pub fn entry(&self) -> SectionEntry {
+        let len = self.bytes.len() as u64;
+        SectionEntry {
+            kind: self.kind,
+            codec: vlf_format::codec::RAW,
+            offset: 0,
+            stored_length: len,
+            raw_length: len,
+            element_size: self.element_size,
+            reserved: 0,
+            raw_hash: *blake3::hash(&self.bytes).as_bytes(),
+        }
+    }
+}
+
+/// The kinds of the shared sections computed from the chosen parameters (with the scene's
+/// sphere). Every other shared section depends on the scene alone, which is what the bake cache
+/// keys on (`crate::cache`).
+pub const PARAMETER_KINDS: [SectionKind; 4] =
+    [SectionKind::Params, SectionKind::Directions, SectionKind::Rotations, SectionKind::Lookup];
+
+/// The shared sections that depend on the scene alone, in file order: SCENE, then TRIANGLES,
+/// PROVENANCE, SOURCES, INPUTS, STRINGS and the optional MATERIALS, CAMERAS, LIGHTS when the
+/// inputs define any. A new section derived from the inputs goes here, so that
+/// fields, shards, merges and the cache key all carry it.
+pub fn scene_sections<'a>(prep: &Prepared<'a>) -> Vec<SharedSection<'a>> {
+    let scene = prep.scene;
+    let record = SceneRecord {
+        center: prep.center,
+        radius: prep.radius,
+        aabb_min: prep.aabb.0,
+        aabb_max: prep.aabb.1,
+        triangle_count: scene.triangles.len() as u64,
+        source_count: scene.sources.len() as u32,
+        input_count: scene.inputs.len() as u32,
+        dropped_degenerate: scene.report.dropped_degenerate,
+        reserved: [0; 3],
+    };
+    // The optional sections (MATERIALS, CAMERAS, LIGHTS) are written only when not empty.
+    std::iter::once(SharedSection::new(SectionKind::Scene, bytemuck::bytes_of(&record).to_vec()))
+        .chain(
+            input_sections(scene)
+                .into_iter()
+                .filter(|(kind, bytes)| kind.is_required() || !bytes.is_empty())
+                .map(|(kind, bytes)| SharedSection::new(kind, bytes)),
+        )
+        .collect()
+}
+
+/// The shared sections computed from the chosen parameters ([`PARAMETER_KINDS`]), in file order.
+fn parameter_sections(params: &Params, request: &Request) -> Vec<SharedSection<'static>> {
+    let lattice = Lattice::new(params.lattice_n);
+    let directions = lattice.directions();
+    let rotations: Vec<[f64; 9]> = directions.iter().map(|&d| frame(d)).collect();
+    let dir_records: Vec<[f32; 4]> = directions.iter().map(|d| [d[0] as f32, d[1] as f32, d[2] as f32, 0.0]).collect();
+    let record = params_record(params, request);
+    vec![
+        SharedSection::new(SectionKind::Params, bytemuck::bytes_of(&record).to_vec()),
+        SharedSection::new(SectionKind::Directions, bytemuck::cast_slice(&dir_records).to_vec()),
+        SharedSection::new(SectionKind::Rotations, bytemuck::cast_slice(&rotations).to_vec()),
+        SharedSection::new(SectionKind::Lookup, bytemuck::cast_slice(&lattice.lookup_table()).to_vec()),
+    ]
+}
+
+/// The PARAMS record (`formats/vlf.md` §5.2) of a bake with `params` chosen for `request`.
+pub fn params_record(params: &Params, request: &Request) -> ParamsRecord {
+    ParamsRecord {
+        lattice_n: params.lattice_n,
+        direction_count: Lattice::new(params.lattice_n).direction_count() as u32,
+        tile_resolution: params.tiles,
+        leaf_size: params.depth.leaf_size,
+        max_depth: params.depth.max_depth,
+        requested_directions: request.requested_directions,
+        requested_tiles: request.requested_tiles,
+        reserved0: 0,
+        max_bytes: request.max_bytes,
+        margin: params.margin,
+        max_bytes_per_triangle: request.max_bytes_per_triangle,
+        reserved1: 0,
+    }
+}
+
+/// Every shared section of the field, in file order: SCENE, the parameter sections, then the
+/// rest of the scene sections. The per-direction sections (`vlf_format::shard::PER_DIRECTION_KINDS`)
+/// follow them in every file a bake writes.
+pub fn shared_sections<'a>(prep: &Prepared<'a>, params: &Params, request: &Request) -> Vec<SharedSection<'a>> {
+    let mut sections = scene_sections(prep);
+    sections.splice(1..1, parameter_sections(params, request));
+    sections
+}

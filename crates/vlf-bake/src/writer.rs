@@ -1,0 +1,326 @@
+//! Writing a bake: lay out a field (or one shard of it), bake its directions in parallel chunks,
+//! and write them in direction order, each byte once, through spill files.
+//!
+//! Directions are independent, so they are baked in parallel (rayon) in chunks, and each chunk is
+//! written in direction order to spill files: the output bytes do not depend on the thread count,
+//! and memory does not grow with the field's size. The spill files are anonymous temporary files
+//! in the output directory; the field itself is written through [`AtomicFile`], so the path holds
+//! the old field or the new one, never a partial one.
+
+use crate::atomic::{AtomicFile, parent_dir};
+use crate::direction::{DirectionData, Scratch, build_direction};
+use crate::error::BakeError;
+use crate::params::Choice;
+use crate::prepare::Prepared;
+use crate::progress::Progress;
+use crate::sections::{BAKER_REVISION, SharedSection, input_hash, shared_sections};
+use crate::shard::ShardSpec;
+use crate::statistics::{Statistics, merge_stats};
+use rayon::prelude::*;
+use std::fs::File;
+use std::io::{self, BufWriter, Seek, Write};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+use vlf_format::shard::shared_hash;
+use vlf_format::{
+    BeamRecord, FieldFile, HashingWriter, Header, PER_DIRECTION_KINDS, Request, SHARD_KIND, SHARD_MAGIC, SectionEntry,
+    SectionKind, SectionWriter, ShardRecord, StatisticsRecord, size,
+};
+use vlf_geom::Lattice;
+use vlf_geom::frame::frame;
+
+/// What a bake produced.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct BakeSummary {
+    pub output: PathBuf,
+    pub triangles: u64,
+    pub dropped_degenerate: u64,
+    pub directions: u32,
+    pub lattice_n: u32,
+    pub tile_resolution: u32,
+    pub leaf_size: u32,
+    pub max_depth: u32,
+    pub automatic: bool,
+    pub choice: String,
+    pub estimated_bytes: Option<u64>,
+    pub bytes: u64,
+    pub seconds: f64,
+    pub content_hash: String,
+    pub input_hash: String,
+    pub statistics: Statistics,
+}
+
+/// A section spilled to an anonymous temporary file while it is produced.
+struct Spill {
+    writer: HashingWriter<BufWriter<File>>,
+}
+
+impl Spill {
+    fn new(dir: &Path) -> io::Result<Spill> {
+        Ok(Spill { writer: HashingWriter::new(BufWriter::with_capacity(1 << 20, tempfile::tempfile_in(dir)?)) })
+    }
+
+    fn finish(self) -> io::Result<(File, u64, [u8; 32])> {
+        let (buf, len, hash) = self.writer.finish()?;
+        let mut file = buf.into_inner().map_err(|e| e.into_error())?;
+        file.rewind()?;
+        Ok((file, len, hash))
+    }
+}
+
+/// The per-direction sections of a file being baked, after its shared sections, in this order:
+/// BEAMS and STATISTICS (reserved, filled last), TILES (reserved, filled direction by direction),
+/// TRIANGLE_IDS (streamed behind it) and LEAF_BOUNDS (spilled to a temporary file, appended at
+/// the end): each byte is written once. Fields and shards share this layout, which `merge`
+/// follows to reproduce a field byte for byte.
+struct DirectionSections {
+    beams_out: SectionWriter,
+    stats_out: SectionWriter,
+    tiles: SectionWriter,
+    ids: SectionWriter,
+    bounds: Spill,
+}
+
+/// Direction by direction: the BEAMS records (bases counted from the file's first direction) and
+/// the STATISTICS of the directions written so far.
+#[derive(Default)]
+struct DirectionTotals {
+    beams: Vec<BeamRecord>,
+    stats: Option<StatisticsRecord>,
+    leaf_base: u64,
+    id_base: u64,
+}
+
+impl DirectionSections {
+    fn open(f: &mut FieldFile, directions: u64, n2: u64, spill_dir: &Path) -> io::Result<Self> {
+        Ok(DirectionSections {
+            beams_out: f.reserve(SectionKind::Beams, directions * size::BEAM)?,
+            stats_out: f.reserve(SectionKind::Statistics, size::STATISTICS)?,
+            tiles: f.reserve(SectionKind::Tiles, directions * n2 * size::TILE)?,
+            ids: f.stream(SectionKind::TriangleIds)?,
+            bounds: Spill::new(spill_dir)?,
+        })
+    }
+
+    fn push(&mut self, d: &DirectionData, totals: &mut DirectionTotals) -> io::Result<()> {
+        self.tiles.write_all(bytemuck::cast_slice(&d.tiles))?;
+        self.ids.write_all(bytemuck::cast_slice(&d.ids))?;
+        self.bounds.writer.write_all(bytemuck::cast_slice(&d.bounds))?;
+        let leaf_count = d.bounds.len() as u64 - 1;
+        let id_count = d.ids.len() as u64;
+        totals.beams.push(BeamRecord { leaf_base: totals.leaf_base, leaf_count, id_base: totals.id_base, id_count });
+        totals.leaf_base += leaf_count + 1;
+        totals.id_base += id_count;
+        merge_stats(totals.stats.get_or_insert_with(StatisticsRecord::zeroed_record), &d.stats);
+        Ok(())
+    }
+
+    fn finish(mut self, f: &mut FieldFile, totals: &DirectionTotals) -> io::Result<StatisticsRecord> {
+        f.finish_section(self.tiles)?;
+        f.finish_section(self.ids)?;
+        let (mut bounds_file, bounds_len, bounds_hash) = self.bounds.finish()?;
+        f.append_from(SectionKind::LeafBounds, &mut bounds_file, bounds_len, bounds_hash)?;
+        self.beams_out.write_all(bytemuck::cast_slice(&totals.beams))?;
+        f.finish_section(self.beams_out)?;
+        let stats = totals.stats.unwrap_or_else(StatisticsRecord::zeroed_record);
+        self.stats_out.write_all(bytemuck::bytes_of(&stats))?;
+        f.finish_section(self.stats_out)?;
+        Ok(stats)
+    }
+}
+
+/// Writes the field of the prepared scene with the chosen `choice` to `output`, atomically: the
+/// whole bake, from the shared sections to the last direction.
+pub fn write_field(
+    prep: &Prepared<'_>,
+    choice: &Choice,
+    request: &Request,
+    output: &Path,
+    progress: &dyn Progress,
+) -> Result<BakeSummary, BakeError> {
+    let start = Instant::now();
+    let io_err = |error: io::Error| BakeError::Io { path: output.to_path_buf(), error };
+    let tmp = AtomicFile::create(output).map_err(io_err)?;
+    let baked = write_into(prep, choice, request, tmp.file(), output, None, progress)?;
+    tmp.commit().map_err(io_err)?;
+    progress.end();
+    Ok(baked.summary(prep, choice, output, start.elapsed().as_secs_f64()))
+}
+
+/// What [`write_into`] wrote.
+#[derive(Clone, Debug)]
+pub struct Baked {
+    pub header: Header,
+    pub statistics: StatisticsRecord,
+    /// The directions the file holds: all of them for a field, the shard's for a shard.
+    pub directions: std::ops::Range<u32>,
+    pub direction_count: u32,
+}
+
+impl Baked {
+    /// The summary `bake` prints.
+    pub fn summary(&self, prep: &Prepared<'_>, choice: &Choice, output: &Path, seconds: f64) -> BakeSummary {
+        let params = &choice.params;
+        BakeSummary {
+            output: output.to_path_buf(),
+            triangles: prep.scene.triangles.len() as u64,
+            dropped_degenerate: prep.scene.report.dropped_degenerate,
+            directions: self.direction_count,
+            lattice_n: params.lattice_n,
+            tile_resolution: params.tiles,
+            leaf_size: params.depth.leaf_size,
+            max_depth: params.depth.max_depth,
+            automatic: choice.automatic,
+            choice: choice.reason.clone(),
+            estimated_bytes: choice.estimated_bytes,
+            bytes: self.header.file_length,
+            seconds,
+            content_hash: vlf_format::hex(&self.header.content_hash),
+            input_hash: vlf_format::hex(&self.header.input_hash),
+            statistics: Statistics::from_record(&self.statistics),
+        }
+    }
+}
+
+/// Writes into `out` (an empty, writable file that will be at `path`; its directory holds the
+/// spill file): the whole field, or with `shard` one shard of it (`formats/vlf-shard.md`).
+///
+/// The file is written in place, each byte once: the shared sections first (after the SHARD
+/// record of a shard), then the per-direction sections ([`DirectionSections`]). Leaves the
+/// "writing" progress phase open; the caller ends it after committing the file.
+pub fn write_into(
+    prep: &Prepared<'_>,
+    choice: &Choice,
+    request: &Request,
+    out: &File,
+    path: &Path,
+    shard: Option<ShardSpec>,
+    progress: &dyn Progress,
+) -> Result<Baked, BakeError> {
+    let params = &choice.params;
+    let io_err = |error: io::Error| BakeError::Io { path: path.to_path_buf(), error };
+
+    let shared = shared_sections(prep, params, request);
+    let direction_count = Lattice::new(params.lattice_n).direction_count() as u32;
+    let range = match shard {
+        None => 0..direction_count,
+        Some(s) => s.directions(direction_count),
+    };
+    let rotations: Vec<[f64; 9]> = Lattice::new(params.lattice_n).directions().iter().map(|&d| frame(d)).collect();
+    let n2 = params.tiles as u64 * params.tiles as u64;
+    let hash = input_hash(prep.scene, request);
+
+    let section_count = shared.len() + PER_DIRECTION_KINDS.len() + shard.is_some() as usize;
+    let out = out.try_clone().map_err(io_err)?;
+    let mut f = match shard {
+        None => FieldFile::create(out, section_count),
+        Some(_) => FieldFile::create_with_magic(out, section_count, SHARD_MAGIC),
+    }
+    .map_err(io_err)?;
+    if let Some(s) = shard {
+        let entries: Vec<SectionEntry> = shared.iter().map(SharedSection::entry).collect();
+        let record = ShardRecord {
+            shard_index: s.index,
+            shard_count: s.count,
+            direction_count,
+            first_direction: range.start,
+            end_direction: range.end,
+            baker_revision: BAKER_REVISION,
+            field_section_count: (section_count - 1) as u32,
+            reserved: 0,
+            shared_hash: shared_hash(&entries),
+        };
+        f.append_kind(SHARD_KIND, size_of::<ShardRecord>() as u32, bytemuck::bytes_of(&record)).map_err(io_err)?;
+    }
+    for s in &shared {
+        f.append_kind(s.kind, s.element_size, &s.bytes).map_err(io_err)?;
+    }
+    // Explicit parameters are held to --max-bytes as a ceiling (automatic ones were chosen to fit
+    // it by estimate): the bake stops as soon as the bytes the field needs exceed it. `fixed`
+    // counts every section of the field whose size is known now, without padding, and a shard
+    // adds its own directions' leaves and ids to it: a lower bound on the field's size, so the
+    // running check never fires early. A field's exact length is checked once it is complete,
+    // a sharded field's by merge.
+    let ceiling = if choice.automatic { u64::MAX } else { request.max_bytes };
+    let l = direction_count as u64;
+    let fixed = size::head(shared.len() + PER_DIRECTION_KINDS.len())
+        + shared.iter().map(|s| s.bytes.len() as u64).sum::<u64>()
+        + l * (size::BEAM + n2 * size::TILE)
+        + size::STATISTICS;
+    let over_budget =
+        |at_least: u64, baked: usize| BakeError::OverBudget { ceiling, at_least, baked, directions: l as usize };
+    let mut sections = DirectionSections::open(&mut f, range.len() as u64, n2, &parent_dir(path)).map_err(io_err)?;
+
+    // Directions are baked in parallel, chunk by chunk; a writer thread appends each finished
+    // chunk in direction order while the next one is computed. The channel holds at most two
+    // chunks, and chunks are sized from the bytes the directions baked so far produced (about
+    // CHUNK_BYTES each, at least one direction per thread), which bounds memory whatever the
+    // scene and tile resolution.
+    const CHUNK_BYTES: u64 = 64 << 20;
+    let threads = rayon::current_num_threads().max(1);
+    let (send, receive) = std::sync::mpsc::sync_channel::<Vec<DirectionData>>(2);
+    progress.begin("baking directions", range.len() as u64);
+    let mut totals = DirectionTotals::default();
+    let (sections_w, totals_w) = (&mut sections, &mut totals);
+    let (written, baked) = std::thread::scope(|scope| {
+        let writer = scope.spawn(move || -> Result<(), BakeError> {
+            for chunk in receive {
+                for d in chunk {
+                    let at_least = fixed
+                        + size::leaves_and_ids(
+                            totals_w.leaf_base + d.bounds.len() as u64,
+                            totals_w.id_base + d.ids.len() as u64,
+                        );
+                    if at_least > ceiling {
+                        return Err(over_budget(at_least, totals_w.beams.len() + 1));
+                    }
+                    sections_w.push(&d, totals_w).map_err(io_err)?;
+                }
+            }
+            Ok(())
+        });
+        let mut baked = Ok(());
+        let (mut chunk_start, mut chunk, mut produced) = (range.start as usize, threads, 0u64);
+        while chunk_start < range.end as usize {
+            let chunk_range = chunk_start..(chunk_start + chunk).min(range.end as usize);
+            chunk_start = chunk_range.end;
+            let result: Result<Vec<DirectionData>, BakeError> = chunk_range
+                .into_par_iter()
+                .map_init(Scratch::default, |s, j| {
+                    let d = build_direction(prep, params, &rotations[j], j, s);
+                    progress.advance(1);
+                    d
+                })
+                .collect();
+            match result {
+                // A send fails only if the writer stopped on an error, which join reports below.
+                Ok(done) => {
+                    produced += done.iter().map(DirectionData::bytes).sum::<u64>();
+                    let per_direction = (produced / (chunk_start - range.start as usize) as u64).max(1);
+                    chunk = ((CHUNK_BYTES / per_direction) as usize).clamp(threads, 64 * threads);
+                    if send.send(done).is_err() {
+                        break;
+                    }
+                }
+                Err(e) => {
+                    baked = Err(e);
+                    break;
+                }
+            }
+        }
+        drop(send);
+        let written = writer.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic));
+        (written, baked)
+    });
+    progress.end();
+    baked?;
+    written?;
+
+    progress.begin("writing", 1);
+    let statistics = sections.finish(&mut f, &totals).map_err(io_err)?;
+    let (_, header) = f.finish(hash).map_err(io_err)?;
+    if shard.is_none() && header.file_length > ceiling {
+        return Err(over_budget(header.file_length, direction_count as usize));
+    }
+    Ok(Baked { header, statistics, directions: range, direction_count })
+}

@@ -1,0 +1,383 @@
+//! The command line as clap parses it: one struct of arguments per subcommand, with every flag's
+//! help text. Values are parsed here ([`crate::values`]); what they mean is decided by the
+//! commands and the libraries.
+
+use crate::values::{parse_light, parse_size, parse_vec3};
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use std::path::PathBuf;
+use vlf_bake::generate;
+use vlf_bake::params::{DEFAULT_LEAF_SIZE, DEFAULT_MAX_DEPTH};
+
+#[derive(Parser)]
+#[command(
+    name = "vlf-bake",
+    version,
+    about = "Bake triangle meshes into visibility fields that load instantly, and inspect, verify and trace them.",
+    long_about = "Bake triangle meshes (OBJ, glTF, GLB) into a visibility field: a precomputed, memory-mappable \
+ray-tracing acceleration structure (Mortensen et al., \"A Visibility Field for Ray Tracing\"). A field is one \
+versioned, content-hashed file; bakes are reproducible to the byte.\n\nTypical use:\n  vlf-bake bake scene.glb -o scene.vlf\n  vlf-bake dump scene.vlf --verify\n  vlf-bake render scene.vlf -o scene.png\n  vlf-bake pack scene.vlf -o scene.packed.vlf   (for transport; `unpack` restores it)\n  vlf-bake rays scene.vlf -o rays.bin && vlf-bake trace scene.vlf --rays rays.bin --out hits.bin --json"
+)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Subcommand)]
+pub enum Command {
+    /// Bake one or more meshes into a field file (or, with --shard, one shard of it).
+    Bake(BakeArgs),
+    /// Merge the shards of a sharded bake into the field a single bake writes, byte for byte.
+    Merge(MergeArgs),
+    /// List, verify or prune a bake cache directory.
+    Cache(CacheArgs),
+    /// Describe a field: header, parameters, sections, statistics; --verify checks every byte.
+    Dump(DumpArgs),
+    /// Compress a field for transport: sections stored as zstd frames (formats/vlf.md §8).
+    Pack(PackArgs),
+    /// Decompress a packed field back into the raw field, byte for byte.
+    Unpack(UnpackArgs),
+    /// Trace a file of rays against a field and write one hit record per ray.
+    Trace(TraceArgs),
+    /// Write a rays file of primary rays for a camera that frames a field's scene.
+    Rays(RaysArgs),
+    /// Render a picture of a field: Whitted ray tracing with shadows, mirrors and glass.
+    Render(Box<RenderArgs>),
+    /// Generate a test scene (the paper's random triangles, grids, slivers) as OBJ.
+    Gen(GenArgs),
+    /// Bake the bundled bunny in a room, dump and verify it, trace frames and render a picture.
+    Demo(DemoArgs),
+}
+
+#[derive(Args)]
+pub struct DemoArgs {
+    /// The meshes to bake, repeatable (default: the bunny in the repository's fixtures, in the
+    /// Cornell-like room whose glTF brings a camera and lights).
+    #[arg(long, value_name = "MESH")]
+    pub input: Vec<PathBuf>,
+    /// Where to write the field, rays and hits.
+    #[arg(long, default_value = "target/vlf-demo", value_name = "DIR")]
+    pub output_dir: PathBuf,
+}
+
+#[derive(Args)]
+pub struct BakeArgs {
+    /// Input meshes: .obj, .gltf or .glb. Several inputs are baked into one field.
+    #[arg(required = true, value_name = "INPUT")]
+    pub inputs: Vec<PathBuf>,
+    /// The field file to write (replaced atomically).
+    #[arg(short, long, value_name = "FIELD")]
+    pub output: PathBuf,
+    /// Number of directions l; rounded up to the next lattice size 2N²+1 (3, 9, 19, 33, 51, ..., 2049, ...).
+    /// Chosen automatically under --max-bytes if absent.
+    #[arg(long, value_name = "L")]
+    pub directions: Option<u32>,
+    /// Tiles per side n of each direction's n×n beam grid. Chosen automatically if absent.
+    #[arg(long, value_name = "N")]
+    pub tiles: Option<u32>,
+    /// BSP depth policy: target triangles per leaf.
+    #[arg(long, default_value_t = DEFAULT_LEAF_SIZE, value_name = "K")]
+    pub leaf_size: u32,
+    /// BSP depth policy: largest depth of a tile's 1D BSP (0 = linear tiles, no BSP).
+    #[arg(long, default_value_t = DEFAULT_MAX_DEPTH, value_name = "D")]
+    pub max_depth: u32,
+    /// Size budget for automatic parameters, and a ceiling for explicit ones: a bake with explicit
+    /// parameters stops, leaving nothing behind, as soon as its field would exceed it (e.g. 4GiB, 512MiB, 1e9).
+    #[arg(long, default_value = "4GiB", value_parser = parse_size, value_name = "SIZE")]
+    pub max_bytes: u64,
+    /// Automatic parameters aim at no more than this many bytes of field per triangle.
+    #[arg(long, default_value = "16KiB", value_parser = parse_size, value_name = "SIZE")]
+    pub max_bytes_per_triangle: u64,
+    /// Worker threads (default: RAYON_NUM_THREADS, else all cores). The output does not depend on it.
+    #[arg(long, value_name = "T")]
+    pub threads: Option<usize>,
+    /// No progress bar and no summary on success.
+    #[arg(short, long)]
+    pub quiet: bool,
+    /// Print the summary as one JSON object.
+    #[arg(long)]
+    pub json: bool,
+    /// Bake only shard K of N (K = 0..N-1): its share of the directions, into a shard file for
+    /// `vlf-bake merge` (docs/build-farms.md).
+    #[arg(long, value_name = "K/N")]
+    pub shard: Option<vlf_bake::shard::ShardSpec>,
+    #[command(flatten)]
+    pub cache: CacheChoice,
+    /// Write a JSON report (inputs, parameters, phase timings, peak memory, output, cache) to FILE.
+    #[arg(long, value_name = "FILE.json")]
+    pub report: Option<PathBuf>,
+}
+
+#[derive(Args)]
+pub struct CacheChoice {
+    /// Bake cache directory: reuse the field of unchanged inputs, store new ones
+    /// (default: the VLF_CACHE_DIR environment variable).
+    #[arg(long, value_name = "DIR")]
+    pub cache_dir: Option<PathBuf>,
+    /// Do not use a cache, even if VLF_CACHE_DIR is set.
+    #[arg(long, conflicts_with = "cache_dir")]
+    pub no_cache: bool,
+}
+
+#[derive(Args)]
+pub struct MergeArgs {
+    /// The shard files of one bake, each once, in any order.
+    #[arg(required = true, value_name = "SHARD")]
+    pub parts: Vec<PathBuf>,
+    /// The field file to write (replaced atomically).
+    #[arg(short, long, value_name = "FIELD")]
+    pub output: PathBuf,
+    #[command(flatten)]
+    pub cache: CacheChoice,
+    /// Write a JSON report to FILE (the schema of `bake --report`).
+    #[arg(long, value_name = "FILE.json")]
+    pub report: Option<PathBuf>,
+    /// No progress bar and no summary on success.
+    #[arg(short, long)]
+    pub quiet: bool,
+    /// Print the summary as one JSON object.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Args)]
+pub struct CacheArgs {
+    #[command(subcommand)]
+    pub action: CacheAction,
+    /// The cache directory (default: the VLF_CACHE_DIR environment variable).
+    #[arg(long, global = true, value_name = "DIR")]
+    pub cache_dir: Option<PathBuf>,
+    /// Print one JSON value instead of text.
+    #[arg(long, global = true)]
+    pub json: bool,
+}
+
+#[derive(Subcommand)]
+pub enum CacheAction {
+    /// List the entries, most recently used first.
+    List,
+    /// Check every byte of every entry (as `dump --verify`) and its key; remove the bad ones.
+    Verify,
+    /// Remove entries unused for longer than --max-age, then the least recently used ones until
+    /// the cache fits in --max-size; and temporary files left by crashed bakes.
+    Prune {
+        /// Keep at most this many bytes (e.g. 20GiB).
+        #[arg(long, value_parser = parse_size, value_name = "SIZE")]
+        max_size: Option<u64>,
+        /// Remove entries not used for this long (e.g. 30d, 12h, 90m).
+        #[arg(long, value_parser = vlf_bake::cache::parse_duration, value_name = "DURATION")]
+        max_age: Option<std::time::Duration>,
+    },
+}
+
+#[derive(Args)]
+pub struct DumpArgs {
+    /// The field file. A packed field is decoded in memory first, which is not instant.
+    pub field: PathBuf,
+    /// Print one JSON object instead of text.
+    #[arg(long)]
+    pub json: bool,
+    /// Recompute every hash and check every offset and index; exit 1 naming the first fault.
+    #[arg(long)]
+    pub verify: bool,
+    /// No progress bar during --verify.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+#[derive(Args)]
+pub struct PackArgs {
+    /// The raw field to pack.
+    pub field: PathBuf,
+    /// The packed field to write (replaced atomically). It is still a field: `dump`, `trace` and
+    /// the runtime open it (decoding it in memory first).
+    #[arg(short, long, value_name = "PACKED")]
+    pub output: PathBuf,
+    /// zstd level, from 1 (fastest) to 19 (smallest). The output does not depend on anything else.
+    #[arg(long, default_value_t = vlf_bake::pack::DEFAULT_LEVEL, value_name = "N",
+          value_parser = clap::value_parser!(i32).range(*vlf_bake::pack::LEVELS.start() as i64..=*vlf_bake::pack::LEVELS.end() as i64))]
+    pub level: i32,
+    /// Worker threads (default: RAYON_NUM_THREADS, else all cores); each compresses whole sections.
+    #[arg(long, value_name = "T")]
+    pub threads: Option<usize>,
+    /// No progress bar and no summary on success.
+    #[arg(short, long)]
+    pub quiet: bool,
+    /// Print the summary (sizes, ratio, MB/s, per-section codecs) as one JSON object.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Args)]
+pub struct UnpackArgs {
+    /// The packed field.
+    pub packed: PathBuf,
+    /// The raw field to write (replaced atomically).
+    #[arg(short, long, value_name = "FIELD")]
+    pub output: PathBuf,
+    /// No progress bar and no summary on success.
+    #[arg(short, long)]
+    pub quiet: bool,
+    /// Print the summary (sizes, ratio, MB/s) as one JSON object.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Args)]
+pub struct TraceArgs {
+    /// The field file.
+    pub field: PathBuf,
+    /// Rays: 32-byte little-endian records (formats/rays.md).
+    #[arg(long, value_name = "FILE")]
+    pub rays: PathBuf,
+    /// Hits: 16-byte records, one per ray (formats/rays.md).
+    #[arg(long, value_name = "FILE")]
+    pub out: PathBuf,
+    /// Answer any-hit (shadow) queries instead of closest-hit.
+    #[arg(long)]
+    pub any_hit: bool,
+    /// Print rays, hits, seconds (tracing only) and mrays_per_s as one JSON object.
+    #[arg(long)]
+    pub json: bool,
+    /// Worker threads (default: RAYON_NUM_THREADS, else all cores).
+    #[arg(long, value_name = "T")]
+    pub threads: Option<usize>,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+pub enum View {
+    /// From outside the scene's bounding sphere, framing all of it.
+    Outside,
+    /// From inside the scene, near its centre.
+    Inside,
+}
+
+#[derive(Args)]
+pub struct RaysArgs {
+    /// The field whose bounding sphere the camera frames.
+    pub field: PathBuf,
+    /// The rays file to write.
+    #[arg(short, long, value_name = "FILE")]
+    pub output: PathBuf,
+    #[arg(long, value_enum, default_value = "outside")]
+    pub view: View,
+    #[arg(long, default_value_t = 512)]
+    pub width: u32,
+    #[arg(long, default_value_t = 512)]
+    pub height: u32,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+pub enum WorkArg {
+    /// Ray/triangle tests.
+    Tests,
+    /// Tiles visited.
+    Tiles,
+    /// BSP leaves visited.
+    Leaves,
+    /// Rays traced.
+    Rays,
+}
+
+#[derive(Args)]
+pub struct RenderArgs {
+    /// The field file.
+    pub field: PathBuf,
+    /// The PNG to write.
+    #[arg(short, long, value_name = "IMAGE.png")]
+    pub output: PathBuf,
+    /// Image width in pixels.
+    #[arg(long, default_value_t = 640)]
+    pub width: u32,
+    /// Image height (default: from the width and the field camera's aspect ratio, else 480).
+    #[arg(long)]
+    pub height: Option<u32>,
+    /// Frame the whole scene from outside, or look across it from inside (like `rays --view`).
+    /// Default: the field's first glTF camera if it has one, else outside.
+    #[arg(long, value_enum, conflicts_with_all = ["camera", "eye"])]
+    pub view: Option<View>,
+    /// Use the field's glTF camera number N (0 = first; `dump` counts them).
+    #[arg(long, value_name = "N", conflicts_with = "eye")]
+    pub camera: Option<usize>,
+    /// Place a pinhole camera at X,Y,Z.
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3, allow_hyphen_values = true)]
+    pub eye: Option<[f64; 3]>,
+    /// The point an --eye camera looks at (default: the centre of the scene).
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3, allow_hyphen_values = true, requires = "eye")]
+    pub target: Option<[f64; 3]>,
+    /// The up direction of an --eye camera.
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3, default_value = "0,1,0", allow_hyphen_values = true)]
+    pub up: [f64; 3],
+    /// Vertical field of view of an --eye camera, in degrees.
+    #[arg(long, default_value_t = 50.0, value_name = "DEGREES")]
+    pub fov: f64,
+    /// A white point light at X,Y,Z with intensity I (irradiance I/d²); repeatable. Replaces the
+    /// field's lights and the default key and fill lights.
+    #[arg(long = "light", value_name = "X,Y,Z,I", value_parser = parse_light, allow_hyphen_values = true)]
+    pub lights: Vec<[f64; 4]>,
+    /// Ignore the field's glTF lights: light the scene with a key and a fill light around the camera.
+    #[arg(long)]
+    pub default_lights: bool,
+    /// Reflection and refraction bounces after the primary ray (at most 64).
+    #[arg(long, default_value_t = 5)]
+    pub max_depth: u32,
+    /// Samples per pixel along each axis (2 = 4 rays per pixel, antialiased).
+    #[arg(long, default_value_t = 2)]
+    pub samples: u32,
+    /// Multiply the image's brightness.
+    #[arg(long, default_value_t = 1.0)]
+    pub exposure: f64,
+    /// Unshadowed light every surface receives.
+    #[arg(long, default_value_t = 0.06)]
+    pub ambient: f64,
+    /// A solid background colour R,G,B (linear, 0 to 1) instead of the sky gradient.
+    #[arg(long, value_name = "R,G,B", value_parser = parse_vec3)]
+    pub background: Option<[f64; 3]>,
+    /// Flat shading: no normals interpolated across edges.
+    #[arg(long)]
+    pub flat: bool,
+    /// Also write a false-colour picture of the work per pixel (black = none, white = --work-max or more).
+    #[arg(long, value_name = "IMAGE.png")]
+    pub work_image: Option<PathBuf>,
+    /// What the work picture shows, summed over every ray of the pixel.
+    #[arg(long, value_enum, default_value = "tests")]
+    pub work: WorkArg,
+    /// The work at the top of the colour scale (default: the 99th percentile of the frame).
+    #[arg(long, value_name = "COUNT")]
+    pub work_max: Option<u64>,
+    /// Worker threads (default: RAYON_NUM_THREADS, else all cores). The picture does not depend on it.
+    #[arg(long, value_name = "T")]
+    pub threads: Option<usize>,
+    /// No progress bar and no summary on success.
+    #[arg(short, long)]
+    pub quiet: bool,
+    /// Print the summary as one JSON object.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+pub enum SceneKind {
+    /// The paper's scene: triangles with centres uniform in [-1,1]³, vertices within ±size of the centre.
+    Random,
+    /// Axis-aligned coplanar grids with shared edges (count = cells per side, 4 layers).
+    Grid,
+    /// Long thin slivers.
+    Slivers,
+}
+
+#[derive(Args)]
+pub struct GenArgs {
+    #[arg(value_enum)]
+    pub scene: SceneKind,
+    /// Number of triangles (random, slivers) or cells per side (grid).
+    #[arg(long, default_value_t = 10_000)]
+    pub count: usize,
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Random scene: half-extent of each triangle around its centre.
+    #[arg(long, default_value_t = generate::DEFAULT_TRIANGLE_SIZE)]
+    pub size: f64,
+    /// The OBJ file to write.
+    #[arg(short, long, value_name = "FILE")]
+    pub output: PathBuf,
+}

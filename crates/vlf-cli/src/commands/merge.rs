@@ -1,0 +1,41 @@
+//! `vlf-bake merge`: check the shards of a bake and merge them into its field; print the summary.
+
+use super::{resolve_cache, stdout_line};
+use crate::args::MergeArgs;
+use crate::progress::Bar;
+use anyhow::{Context, Result};
+use vlf_bake::job::run_merge_job;
+use vlf_bake::params::human_bytes;
+
+/// `vlf-bake merge`: runs the merge job and prints its summary.
+pub fn run(a: &MergeArgs) -> Result<()> {
+    let (cache, cache_note) = resolve_cache(&a.cache, a.quiet);
+    let bar = Bar::new(a.quiet || a.json);
+    let out = run_merge_job(&a.parts, &a.output, cache, cache_note, &bar)?;
+    if !a.quiet {
+        for w in &out.warnings {
+            eprintln!("warning: {w}");
+        }
+    }
+    if let Some(path) = &a.report {
+        out.report.write(path).with_context(|| format!("cannot write the report {}", path.display()))?;
+    }
+    let s = &out.summary;
+    if a.json {
+        stdout_line(&serde_json::to_string(s)?)?;
+    } else if !a.quiet {
+        stdout_line(&format!(
+            "merged {} shards into {}: {} directions × {}² tiles, {} ({} bytes) in {:.2} s\n  content hash {}\n  input hash   {}",
+            s.shards,
+            s.output.display(),
+            s.directions,
+            s.tile_resolution,
+            human_bytes(s.bytes),
+            s.bytes,
+            s.check_seconds + s.copy_seconds,
+            s.content_hash,
+            s.input_hash
+        ))?;
+    }
+    Ok(())
+}

@@ -1,0 +1,52 @@
+//! The subcommands: one module each (`pack` holds `pack` and `unpack`), each with the one
+//! function `main` calls for it, which turns the arguments into the libraries' terms, calls them
+//! once, and prints what they return.
+
+pub mod bake;
+pub mod cache;
+pub mod demo;
+pub mod dump;
+pub mod gen_scene;
+pub mod merge;
+pub mod pack;
+pub mod rays;
+pub mod render;
+pub mod trace;
+
+use crate::args::CacheChoice;
+use anyhow::Result;
+use std::io::Write;
+use std::path::PathBuf;
+use vlf_bake::cache::{CACHE_DIR_ENV, Cache};
+
+/// Prints one line (or several joined by newlines) on standard output and flushes it, so that a
+/// closed pipe is reported here (and `main` treats it as success).
+pub fn stdout_line(s: &str) -> Result<()> {
+    let mut out = std::io::stdout().lock();
+    writeln!(out, "{s}")?;
+    out.flush()?;
+    Ok(())
+}
+
+/// The cache to use for `--cache-dir` / `--no-cache` / `VLF_CACHE_DIR`, or why there is none. A
+/// cache directory that cannot be created is not an error (a cache only ever saves time): the bake
+/// goes on without it, with a warning unless `quiet`.
+pub fn resolve_cache(choice: &CacheChoice, quiet: bool) -> (Option<Cache>, Option<String>) {
+    let env = std::env::var_os(CACHE_DIR_ENV).filter(|v| !v.is_empty()).map(PathBuf::from);
+    if choice.no_cache {
+        return (None, Some("--no-cache".into()));
+    }
+    match choice.cache_dir.clone().or(env) {
+        None => (None, Some(format!("no --cache-dir and no {CACHE_DIR_ENV}"))),
+        Some(dir) => match Cache::open(&dir) {
+            Ok(cache) => (Some(cache), None),
+            Err(e) => {
+                let note = format!("not using the cache: {e}");
+                if !quiet {
+                    eprintln!("warning: {note}");
+                }
+                (None, Some(note))
+            }
+        },
+    }
+}

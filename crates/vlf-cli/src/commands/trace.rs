@@ -1,0 +1,63 @@
+//! `vlf-bake trace`: trace a file of rays against a field, write one hit record per ray.
+
+use super::stdout_line;
+use crate::args::TraceArgs;
+use anyhow::{Context, Result, bail};
+use std::io::Write;
+use std::path::Path;
+use std::time::Instant;
+use vlf_bake::atomic::write_atomically;
+use vlf_runtime::{Field, Hit, Ray};
+
+/// Reads a rays file (`formats/rays.md`): 32-byte records.
+fn read_rays(path: &Path) -> Result<Vec<Ray>> {
+    let bytes = std::fs::read(path).with_context(|| format!("cannot read rays file {}", path.display()))?;
+    if bytes.len() % size_of::<Ray>() != 0 {
+        bail!(
+            "rays file {} is {} bytes, not a multiple of the 32-byte ray record (formats/rays.md)",
+            path.display(),
+            bytes.len()
+        );
+    }
+    Ok(bytemuck::pod_collect_to_vec(&bytes))
+}
+
+/// `vlf-bake trace`: answers every ray of a rays file and writes the hits file.
+pub fn run(a: &TraceArgs) -> Result<()> {
+    let field = Field::open(&a.field)?;
+    let rays = read_rays(&a.rays)?;
+    let mut hits = vec![Hit::MISS; rays.len()];
+    let start = Instant::now();
+    if a.any_hit {
+        use rayon::prelude::*;
+        let view = field.view();
+        rays.par_iter().zip(hits.par_iter_mut()).with_min_len(256).for_each(|(r, h)| {
+            *h = Hit::record(view.any_hit_counted(r, &mut ()));
+        });
+    } else {
+        field.par_closest_hits(&rays, &mut hits);
+    }
+    let seconds = start.elapsed().as_secs_f64();
+    write_atomically(&a.out, |w| w.write_all(bytemuck::cast_slice(&hits)))
+        .with_context(|| format!("cannot write hits file {}", a.out.display()))?;
+    let hit_count = hits.iter().filter(|h| h.prim != u32::MAX).count();
+    let invalid = rays.iter().filter(|r| !r.is_valid()).count();
+    let mrays = rays.len() as f64 / seconds.max(1e-12) / 1e6;
+    if a.json {
+        stdout_line(
+            &serde_json::json!({
+                "rays": rays.len(), "hits": hit_count, "invalid": invalid,
+                "seconds": seconds, "mrays_per_s": mrays,
+                "threads": rayon::current_num_threads(), "any_hit": a.any_hit,
+            })
+            .to_string(),
+        )
+    } else {
+        stdout_line(&format!(
+            "traced {} rays ({} hits, {invalid} invalid) in {seconds:.3} s: {mrays:.2} Mrays/s on {} threads",
+            rays.len(),
+            hit_count,
+            rayon::current_num_threads()
+        ))
+    }
+}
