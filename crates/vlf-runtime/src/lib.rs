@@ -67,6 +67,7 @@ use vlf_format::AlignedBytes;
 use vlf_format::pack::Unpacked;
 
 pub use query::FieldView;
+use scene::SceneSections;
 pub use scene::{CameraProjection, LightKind, Material, SceneCamera, SceneLight};
 pub use vlf_format::pack::PackedLayout;
 pub use vlf_format::{FieldReader, FormatError, hex};
@@ -492,6 +493,37 @@ impl<'a> FieldView<'a> {
     /// a valid field.
     pub fn from_bytes(bytes: &'a [u8]) -> Result<FieldView<'a>, FormatError> {
         FieldReader::new(bytes).map(FieldView::new)
+    }
+}
+
+impl Field {
+    /// Every material the field holds, in MATERIALS order (sorted by input, then index).
+    pub fn materials(&self) -> impl ExactSizeIterator<Item = Material<'_>> + '_ {
+        SceneSections(*self.reader()).materials()
+    }
+
+    /// The position in [`Field::materials`] of the material of triangle `prim`: its source's
+    /// material, looked up by (input, index) with a binary search. `None` if the triangle has no
+    /// material or the field holds no record for it (a 1.0 field holds none): use a default.
+    pub fn material_index(&self, prim: u32) -> Option<usize> {
+        SceneSections(*self.reader()).material_index(prim)
+    }
+
+    /// The material of triangle `prim` ([`Field::material_index`]).
+    pub fn material(&self, prim: u32) -> Option<Material<'_>> {
+        SceneSections(*self.reader()).material(prim)
+    }
+
+    /// The cameras of the field's glTF inputs, in node order. A record of an unknown kind (a
+    /// newer or damaged file) is skipped.
+    pub fn cameras(&self) -> impl Iterator<Item = SceneCamera<'_>> + '_ {
+        SceneSections(*self.reader()).cameras()
+    }
+
+    /// The punctual lights of the field's glTF inputs, in node order. A record of an unknown kind
+    /// is skipped.
+    pub fn lights(&self) -> impl Iterator<Item = SceneLight<'_>> + '_ {
+        SceneSections(*self.reader()).lights()
     }
 }
 

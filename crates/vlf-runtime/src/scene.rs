@@ -3,8 +3,7 @@
 //! of glTF inputs. Read from the mapped sections like everything else; a value a lying file holds
 //! is returned as it is (callers that need finite numbers check), never a panic.
 
-use crate::Field;
-use vlf_format::{CameraRecord, LightRecord, MaterialRecord, NO_INDEX, camera_kind, light_kind};
+use vlf_format::{CameraRecord, FieldReader, LightRecord, MaterialRecord, NO_INDEX, camera_kind, light_kind};
 
 /// A surface of classical (Whitted) ray tracing, as MATERIALS stores it. Colours are linear RGB.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -117,17 +116,22 @@ pub struct SceneLight<'a> {
     pub node: u32,
 }
 
-impl Field {
+/// The rendering sections of a field's reader, read as the types above (the methods of
+/// [`crate::Field`] of the same names delegate here).
+#[derive(Clone, Copy)]
+pub(crate) struct SceneSections<'a>(pub(crate) FieldReader<'a>);
+
+impl<'a> SceneSections<'a> {
     /// Every material the field holds, in MATERIALS order (sorted by input, then index).
-    pub fn materials(&self) -> impl ExactSizeIterator<Item = Material<'_>> + '_ {
-        self.reader().materials.iter().map(|m| self.material_from(m))
+    pub(crate) fn materials(self) -> impl ExactSizeIterator<Item = Material<'a>> {
+        self.0.materials.iter().map(move |m| self.material_from(m))
     }
 
-    /// The position in [`Field::materials`] of the material of triangle `prim`: its source's
+    /// The position in [`crate::Field::materials`] of the material of triangle `prim`: its source's
     /// material, looked up by (input, index) with a binary search. `None` if the triangle has no
     /// material or the field holds no record for it (a 1.0 field holds none): use a default.
-    pub fn material_index(&self, prim: u32) -> Option<usize> {
-        let r = self.reader();
+    pub(crate) fn material_index(self, prim: u32) -> Option<usize> {
+        let r = self.0;
         let source = r.sources.get(r.provenance.get(prim as usize)?.source as usize)?;
         if source.material == NO_INDEX {
             return None;
@@ -135,28 +139,28 @@ impl Field {
         r.materials.binary_search_by_key(&(source.input, source.material), |m| (m.input, m.index)).ok()
     }
 
-    /// The material of triangle `prim` ([`Field::material_index`]).
-    pub fn material(&self, prim: u32) -> Option<Material<'_>> {
-        self.material_index(prim).map(|i| self.material_from(&self.reader().materials[i]))
+    /// The material of triangle `prim` ([`crate::Field::material_index`]).
+    pub(crate) fn material(self, prim: u32) -> Option<Material<'a>> {
+        self.material_index(prim).map(|i| self.material_from(&self.0.materials[i]))
     }
 
     /// The cameras of the field's glTF inputs, in node order. A record of an unknown kind (a
     /// newer or damaged file) is skipped.
-    pub fn cameras(&self) -> impl Iterator<Item = SceneCamera<'_>> + '_ {
-        self.reader().cameras.iter().filter_map(|c| self.camera_from(c))
+    pub(crate) fn cameras(self) -> impl Iterator<Item = SceneCamera<'a>> {
+        self.0.cameras.iter().filter_map(move |c| self.camera_from(c))
     }
 
     /// The punctual lights of the field's glTF inputs, in node order. A record of an unknown kind
     /// is skipped.
-    pub fn lights(&self) -> impl Iterator<Item = SceneLight<'_>> + '_ {
-        self.reader().lights.iter().filter_map(|l| self.light_from(l))
+    pub(crate) fn lights(self) -> impl Iterator<Item = SceneLight<'a>> {
+        self.0.lights.iter().filter_map(move |l| self.light_from(l))
     }
 
-    fn name(&self, offset: u32, length: u32) -> &str {
-        self.reader().string(offset, length).unwrap_or("")
+    fn name(self, offset: u32, length: u32) -> &'a str {
+        self.0.string(offset, length).unwrap_or("")
     }
 
-    fn material_from(&self, m: &MaterialRecord) -> Material<'_> {
+    fn material_from(self, m: &MaterialRecord) -> Material<'a> {
         Material {
             name: self.name(m.name_offset, m.name_length),
             input: m.input,
@@ -171,7 +175,7 @@ impl Field {
         }
     }
 
-    fn camera_from(&self, c: &CameraRecord) -> Option<SceneCamera<'_>> {
+    fn camera_from(self, c: &CameraRecord) -> Option<SceneCamera<'a>> {
         let projection = match c.kind {
             camera_kind::PERSPECTIVE => CameraProjection::Perspective {
                 yfov: c.yfov,
@@ -194,7 +198,7 @@ impl Field {
         })
     }
 
-    fn light_from(&self, l: &LightRecord) -> Option<SceneLight<'_>> {
+    fn light_from(self, l: &LightRecord) -> Option<SceneLight<'a>> {
         let kind = match l.kind {
             light_kind::POINT => LightKind::Point,
             light_kind::SPOT => LightKind::Spot { inner_cone: l.inner_cone, outer_cone: l.outer_cone },
