@@ -10,7 +10,7 @@
 //! f32), so a triangle is referenced in every leaf whose closed box it comes within `μ` of, and
 //! perhaps in a few more.
 
-use crate::{KdNode, KdParams, KdTree, MAX_DEPTH};
+use crate::tree::{KdNode, KdParams, KdTree, MAX_DEPTH, MAX_LINK};
 
 type Tri = [[f32; 3]; 3];
 
@@ -38,7 +38,7 @@ struct Ctx<'a> {
 }
 
 pub(crate) fn build(triangles: &[Tri], params: KdParams) -> KdTree {
-    assert!(triangles.len() <= crate::MAX_LINK as usize, "kd-tree: more than 2^30 triangles");
+    assert!(triangles.len() <= MAX_LINK as usize, "kd-tree: more than 2^30 triangles");
     let params = KdParams { max_depth: params.max_depth.min(MAX_DEPTH), leaf_size: params.leaf_size };
     let mut lo = [f32::INFINITY; 3];
     let mut hi = [f32::NEG_INFINITY; 3];
@@ -86,7 +86,7 @@ pub(crate) fn build(triangles: &[Tri], params: KdParams) -> KdTree {
                 max_depth_reached = max_depth_reached.max(depth);
                 nodes[index] = KdNode::leaf(references.len() as u32, ids.len() as u32);
                 references.extend_from_slice(&ids);
-                assert!(references.len() <= crate::MAX_LINK as usize, "kd-tree: more than 2^30 references");
+                assert!(references.len() <= MAX_LINK as usize, "kd-tree: more than 2^30 references");
             }
             Tmp::Inner { axis, split, kids } => {
                 let first = nodes.len();
