@@ -22,29 +22,6 @@ const MAX_LINES: usize = 700;
 const MAX_MAIN_LINES: usize = 300;
 const CLI_MAIN: &str = "crates/vlf-cli/src/main.rs";
 
-/// Files over [`MAX_LINES`] that this repository knows about and has not split yet, with why.
-/// Each must still exist and still be over the limit: an entry goes once its file is split.
-const KNOWN_LONG_FILES: &[(&str, &str)] = &[(
-    "crates/vlf-capi/src/lib.rs",
-    "the C API's one module of `extern \"C\"` functions; to be split by the C API's owner",
-)];
-
-/// Cycles through a crate root that this repository knows about and has not untangled yet, in
-/// crates whose owners are changing them for other reasons (the leaf kernel), with why. Each must
-/// still be found: an entry goes once its cycle is gone.
-const KNOWN_CYCLES: &[(&str, &str, &str)] = &[
-    (
-        "crates/vlf-kdtree/src/lib.rs",
-        "crate -> build -> crate",
-        "lib.rs calls build::build, which builds lib.rs's KdTree; move the node types out of lib.rs",
-    ),
-    (
-        "crates/vlf-runtime/src/lib.rs",
-        "crate -> scene -> crate",
-        "lib.rs re-exports scene's types, and scene.rs adds methods to lib.rs's Field",
-    ),
-];
-
 fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).parent().expect("the repository").to_path_buf()
 }
@@ -516,19 +493,12 @@ fn no_module_imports_a_module_that_imports_it_back() {
         }
     }
     assert!(modules > 50, "only {modules} modules found: is the scanner reading the crates?");
-    let known = |file: &str, cycle: &str| KNOWN_CYCLES.iter().any(|(f, c, _)| *f == file && *c == cycle);
-    let new: Vec<String> = found
-        .iter()
-        .filter(|(file, cycle)| !known(file, cycle))
-        .map(|(file, cycle)| format!("{file}: {cycle}"))
-        .collect();
-    assert!(new.is_empty(), "modules that import each other (a module graph must have no cycle):\n{}", new.join("\n"));
-    for (file, cycle, why) in KNOWN_CYCLES {
-        assert!(
-            found.iter().any(|(f, c)| f == file && c == cycle),
-            "{file}: {cycle} is gone: remove it from KNOWN_CYCLES ({why})"
-        );
-    }
+    let cycles: Vec<String> = found.iter().map(|(file, cycle)| format!("{file}: {cycle}")).collect();
+    assert!(
+        cycles.is_empty(),
+        "modules that import each other (a module graph must have no cycle):\n{}",
+        cycles.join("\n")
+    );
 }
 
 #[test]
@@ -546,15 +516,11 @@ fn no_source_file_is_over_700_lines_and_the_command_lines_main_is_under_300() {
     for file in &files {
         let relative = file.strip_prefix(root()).unwrap().to_str().unwrap().to_string();
         let n = lines(file);
-        if n > MAX_LINES && !KNOWN_LONG_FILES.iter().any(|(known, _)| *known == relative) {
+        if n > MAX_LINES {
             long.push(format!("{relative}: {n} lines"));
         }
     }
     assert!(long.is_empty(), "source files over {MAX_LINES} lines (split them by job):\n{}", long.join("\n"));
-    for (known, why) in KNOWN_LONG_FILES {
-        let n = lines(&root().join(known));
-        assert!(n > MAX_LINES, "{known} is {n} lines now: remove it from KNOWN_LONG_FILES ({why})");
-    }
     let main = lines(&root().join(CLI_MAIN));
     assert!(main < MAX_MAIN_LINES, "{CLI_MAIN} is {main} lines; it only parses, dispatches and prints");
 }
