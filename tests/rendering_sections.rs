@@ -145,7 +145,7 @@ fn a_version_1_0_field_reads_as_one_without_materials() {
     assert_eq!(field.reader().header.version_minor, 0);
     assert!(field.reader().entry(SectionKind::Materials).is_none());
     // The sources still name material indices; without records, every triangle gets the default.
-    assert_eq!(field.provenance(0).unwrap().material, 0);
+    assert_eq!(field.provenance(0).unwrap().material, Some(0));
     assert_eq!(
         (field.materials().len(), field.material(0), field.cameras().count(), field.lights().count()),
         (0, None, 0, 0)

@@ -366,8 +366,8 @@ pub unsafe extern "C" fn vlf_provenance(
             kind: p.kind,
             mesh: p.mesh,
             primitive: p.primitive,
-            node: p.node,
-            material: p.material,
+            node: p.node.unwrap_or(VLF_NO_INDEX),
+            material: p.material.unwrap_or(VLF_NO_INDEX),
             index: p.index,
         });
         Ok(())

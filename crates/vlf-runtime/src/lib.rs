@@ -63,8 +63,8 @@ mod scene;
 use std::fs::File;
 use std::io::Read;
 use std::path::{Path, PathBuf};
-use vlf_format::AlignedBytes;
 use vlf_format::pack::Unpacked;
+use vlf_format::{AlignedBytes, NO_INDEX};
 
 pub use query::FieldView;
 use scene::SceneSections;
@@ -170,12 +170,37 @@ pub struct Provenance<'a> {
     pub mesh: u32,
     /// glTF primitive index within the mesh (0 otherwise).
     pub primitive: u32,
-    /// glTF node index (`u32::MAX` otherwise).
-    pub node: u32,
-    /// Material index in the input (`u32::MAX` if none).
-    pub material: u32,
+    /// glTF node index; `None` outside glTF.
+    pub node: Option<u32>,
+    /// Material index in the input; `None` if the source has no material.
+    pub material: Option<u32>,
     /// The triangle's index within its source.
     pub index: u32,
+}
+
+/// The parameters of a bake (`formats/vlf.md` §5.2): what was asked for and what the baker chose.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Parameters {
+    /// The lattice size `N`: the field stores `2N² + 1` directions.
+    pub lattice_n: u32,
+    /// The number of stored directions.
+    pub directions: u32,
+    /// Tiles per side of each direction's grid.
+    pub tiles: u32,
+    /// The leaf policy's target number of triangles per leaf.
+    pub leaf_size: u32,
+    /// The leaf policy's largest depth.
+    pub max_depth: u32,
+    /// The conservative margin `μ`, in world units.
+    pub margin: f64,
+    /// The directions asked for; `None` if the baker chose them.
+    pub requested_directions: Option<u32>,
+    /// The tiles asked for; `None` if the baker chose them.
+    pub requested_tiles: Option<u32>,
+    /// The size budget of automatic parameters, and the ceiling of explicit ones, in bytes.
+    pub max_bytes: u64,
+    /// The budget per triangle of automatic parameters, in bytes.
+    pub max_bytes_per_triangle: u64,
 }
 
 impl OpenOptions {
@@ -430,8 +455,8 @@ impl Field {
             kind: s.kind,
             mesh: s.mesh,
             primitive: s.primitive,
-            node: s.node,
-            material: s.material,
+            node: (s.node != NO_INDEX).then_some(s.node),
+            material: (s.material != NO_INDEX).then_some(s.material),
             index: p.index,
         })
     }
@@ -474,6 +499,35 @@ impl Field {
     /// that misses it misses everything.
     pub fn bounding_sphere(&self) -> ([f64; 3], f64) {
         (self.reader().scene.center, self.reader().scene.radius)
+    }
+
+    /// The corners of the box around every vertex, in world units: the scene's extent, tighter
+    /// than [`Field::bounding_sphere`].
+    pub fn bounds(&self) -> ([f64; 3], [f64; 3]) {
+        (self.reader().scene.aabb_min, self.reader().scene.aabb_max)
+    }
+
+    /// The format version of the file, `(major, minor)` (`formats/vlf.md` §3.4).
+    pub fn format_version(&self) -> (u16, u16) {
+        let h = self.reader().header;
+        (h.version_major, h.version_minor)
+    }
+
+    /// The parameters the field was baked with, as asked for and as chosen.
+    pub fn parameters(&self) -> Parameters {
+        let p = self.reader().params;
+        Parameters {
+            lattice_n: p.lattice_n,
+            directions: p.direction_count,
+            tiles: p.tile_resolution,
+            leaf_size: p.leaf_size,
+            max_depth: p.max_depth,
+            margin: p.margin,
+            requested_directions: p.requested_directions(),
+            requested_tiles: p.requested_tiles(),
+            max_bytes: p.max_bytes,
+            max_bytes_per_triangle: p.max_bytes_per_triangle,
+        }
     }
 
     /// The size of the field in bytes (for a packed field, decoded).
