@@ -148,10 +148,10 @@ fn a_field_modified_in_place_while_mapped_answers_differently_without_crashing()
     use std::os::unix::fs::FileExt;
     let (dir, field) = vlf_tests::bake(&scene(), 33, 16, DepthPolicy::default());
     let path = dir.path().join("scene.vlf");
-    let ids = *field.reader().entry(vlf_format::SectionKind::TriangleIds).unwrap();
+    let ids = *field.reader().entry(vlf_format::SectionKind::Leaves).unwrap();
     drop(field);
     let (status, output) = with_mapped_child(&path, || {
-        // Another program overwrites TRIANGLE_IDS in place, keeping the length.
+        // Another program overwrites LEAVES in place, keeping the length.
         let mut rng = Rng::new(3);
         let noise: Vec<u8> = (0..ids.stored_length).map(|_| rng.next_u64() as u8).collect();
         let file = std::fs::OpenOptions::new().write(true).open(&path).unwrap();

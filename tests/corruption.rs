@@ -194,11 +194,17 @@ fn foreign_and_damaged_magic_files_are_named() {
 #[test]
 fn a_future_major_version_is_refused_by_name() {
     let mut bytes = tiny_field();
-    bytes[8..10].copy_from_slice(&2u16.to_le_bytes());
+    bytes[8..10].copy_from_slice(&3u16.to_le_bytes());
     let err = Field::from_bytes(&bytes).err().expect("opened a future major version");
-    assert!(matches!(err, OpenError::Bytes(FormatError::UnsupportedVersion { major: 2, .. })), "{err}");
-    let says = format!("format version 2.{} is not supported", vlf_format::VERSION_MINOR);
+    assert!(matches!(err, OpenError::Bytes(FormatError::UnsupportedVersion { major: 3, .. })), "{err}");
+    let says = format!("format version 3.{} is not supported", vlf_format::VERSION_MINOR);
     assert!(err.to_string().contains(&says), "{err}");
+    assert!(err.to_string().contains("newer vlf-bake"), "{err}");
+    // And a field of the previous major version says to rebake it.
+    bytes[8..10].copy_from_slice(&1u16.to_le_bytes());
+    let err = Field::from_bytes(&bytes).err().expect("opened an old major version");
+    assert!(err.to_string().contains("format version 1.0 is not supported"), "{err}");
+    assert!(err.to_string().contains("rebake it"), "{err}");
 }
 
 #[test]

@@ -234,7 +234,7 @@ fn run(label: &str, tris: &[Tri], sets: &[KdParams], per_family: usize, seed: u6
         let tree = KdTree::build(tris, p);
         check_structure(&tree, tris);
         for (family, rays) in ray_families(&tree, tris, per_family, seed + i as u64, grid) {
-            let tally = compare(&tree, tris, &rays);
+            let tally = compare(&tree, tris, [0.0; 3], &rays);
             assert_exact(&format!("{label} ({p:?}) / {family}"), &tally);
             total.add(tally);
             let mut stats = TraceStats::default();
@@ -378,7 +378,7 @@ fn degenerate_triangles() {
     run("degenerate mix", &kept, &[params(8, 4), params(20, 2)], 3_000, 41, None);
 
     // Kept in the tree, degenerate triangles still answer exactly as the brute force does.
-    let brute = BruteForce { triangles: &raw };
+    let brute = BruteForce::new(&raw);
     for p in [params(8, 4), params(20, 1)] {
         let tree = KdTree::build(&raw, p);
         assert_eq!(tree.stats().triangles, raw.len() as u64);
@@ -404,7 +404,7 @@ fn the_stanford_bunny_scan() {
 fn rays_from_inside_a_closed_box_always_hit() {
     let (lo, hi) = ([-1.0f32, -0.5, -0.25], [1.0f32, 0.5, 0.25]);
     let tris = generate::closed_box(lo, hi);
-    let brute = BruteForce { triangles: &tris };
+    let brute = BruteForce::new(&tris);
     for p in [params(0, 1), params(20, 1), params(8, 4)] {
         let tree = KdTree::build(&tris, p);
         let mut rng = Rng::new(9);

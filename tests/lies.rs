@@ -5,8 +5,9 @@
 //! - [`queries_on_a_lying_field_never_panic`]: every payload section overwritten with zeros, ones,
 //!   sparse and dense random bytes in turn, and a frame of rays traced;
 //! - [`targeted_lies_deep_inside_sections`]: one value at a time made out of range (or wrong but in
-//!   range) deep inside a section: a triangle id, a leaf bound, a tile record, a direction's BEAMS
-//!   record, its rotation, its LOOKUP entry, the scene's radius, a triangle's vertices. Each answer
+//!   range) deep inside a section: a triangle id, a ref's box, a leaf's end or boundary, a block's
+//!   leaf count, a TILES entry, a direction's BEAMS record, its rotation, its LOOKUP entry, the
+//!   scene's radius, a triangle's vertices. Each answer
 //!   must be *sound* (a hit is a real hit on a stored triangle, never closer than the true closest;
 //!   an any-hit is a real hit) and each lie confined to the rays that use the lied-about direction.
 
@@ -14,7 +15,8 @@
 
 use vlf_bake::generate::Rng;
 use vlf_bake::{DepthPolicy, Scene, generate};
-use vlf_format::{BeamRecord, FieldReader, LOOKUP_FLIP, LOOKUP_NONE, SectionKind, TileRecord};
+use vlf_format::block::{Block, MAX_LEAVES, header_bytes};
+use vlf_format::{BeamRecord, EMPTY_TILE, FieldReader, LOOKUP_FLIP, LOOKUP_NONE, SectionKind};
 use vlf_geom::{BruteForce, Camera, Hit, Intersector, Ray, TriRay};
 use vlf_runtime::Field;
 
@@ -44,8 +46,7 @@ fn queries_on_a_lying_field_never_panic() {
         SectionKind::Lookup,
         SectionKind::Beams,
         SectionKind::Tiles,
-        SectionKind::LeafBounds,
-        SectionKind::TriangleIds,
+        SectionKind::Leaves,
         SectionKind::Triangles,
     ];
     let mut opened = 0;
@@ -98,16 +99,17 @@ struct Lie {
 }
 
 /// Checks that `got` (closest hit) and `any` (any-hit) of a field whose stored triangles are
-/// `tris` are sound for `ray`: a hit is the kernel's own hit on the stored triangle it names, and no
-/// closer than the brute-force closest hit over all stored triangles; an any-hit is a real hit.
-fn assert_sound(what: &str, tris: &[[[f32; 3]; 3]], ray: &Ray, got: Option<Hit>, any: Option<Hit>) {
-    let truth = BruteForce { triangles: tris }.closest_hit(ray);
+/// `tris` (relative to `origin`) are sound for `ray`: a hit is the kernel's own hit on the stored
+/// triangle it names, and no closer than the brute-force closest hit over all stored triangles; an
+/// any-hit is a real hit.
+fn assert_sound(what: &str, tris: &[[[f32; 3]; 3]], origin: [f64; 3], ray: &Ray, got: Option<Hit>, any: Option<Hit>) {
+    let truth = BruteForce::relative(tris, origin).closest_hit(ray);
     for (kind, hit) in [("closest", got), ("any", any)] {
         let Some(h) = hit else { continue };
         let tri = tris
             .get(h.prim as usize)
             .unwrap_or_else(|| panic!("{what}: {kind} hit on triangle {} of {}", h.prim, tris.len()));
-        let own = TriRay::new(ray).intersect(tri[0], tri[1], tri[2], ray.tmax);
+        let own = TriRay::relative(ray, origin).intersect(tri[0], tri[1], tri[2], ray.tmax);
         assert_eq!(
             own.map(|o| o.t.to_bits()),
             Some(h.t.to_bits()),
@@ -145,38 +147,48 @@ fn targeted_lies_deep_inside_sections() {
     let t_count = r.triangles.len() as u32;
 
     // A direction near the end of the file's sections and its fullest tile: values deep inside
-    // BEAMS, TILES, LEAF_BOUNDS and TRIANGLE_IDS, far from where each section starts.
+    // BEAMS, TILES and LEAVES, far from where each section starts.
     let j = l - 2;
     let beam: BeamRecord = r.beams[j];
     let tiles = &r.tiles[j * n * n..(j + 1) * n * n];
-    let leaves = |t: &TileRecord| {
-        let first = (beam.leaf_base + t.first_leaf as u64) as usize;
-        (first, first + (1usize << t.depth))
-    };
-    let ids_in = |t: &TileRecord| {
-        let (a, b) = leaves(t);
-        r.leaf_bounds[b] - r.leaf_bounds[a]
-    };
-    let tile_index = (0..n * n).max_by_key(|&i| ids_in(&tiles[i])).unwrap();
-    let tile = tiles[tile_index];
-    assert!(tile.depth > 0 && ids_in(&tile) > 4, "the test needs a deep, full tile");
-    let (first_leaf, _) = leaves(&tile);
-    // The tile's first non-empty leaf, its first id, and the byte offsets of all three records.
-    let k = (first_leaf..).find(|&k| r.leaf_bounds[k + 1] > r.leaf_bounds[k]).unwrap();
-    let id_index = (beam.id_base + r.leaf_bounds[k] as u64) as usize;
-    let tile_at = offset(SectionKind::Tiles) + (j * n * n + tile_index) * size_of::<TileRecord>();
-    let bound_at = offset(SectionKind::LeafBounds) + 4 * k;
-    let id_at = offset(SectionKind::TriangleIds) + 4 * id_index;
+    let block_of = |entry: u32| Block::parse(&r.leaves[(beam.leaves_base + entry as u64) as usize..]).unwrap();
+    let tile_index =
+        (0..n * n).filter(|&i| tiles[i] != EMPTY_TILE).max_by_key(|&i| block_of(tiles[i]).ref_count()).unwrap();
+    let entry = tiles[tile_index];
+    let block = block_of(entry);
+    assert!(block.leaf_count() > 1 && block.ref_count() > 4, "the test needs a full tile of several leaves");
+    // The tile's first non-empty leaf and its first ref, and the byte offsets of everything lied
+    // about.
+    let k = (0..block.leaf_count()).find(|&k| !block.leaf(k).unwrap().is_empty()).unwrap();
+    let leaf = block.leaf(k).unwrap();
+    let kk = block.leaf_count();
+    let block_at = offset(SectionKind::Leaves) + 8 * (beam.leaves_base + entry as u64) as usize;
+    let bounds_at = block_at + 4;
+    let ends_at = block_at + header_bytes(kk) - 4 * kk;
+    let first_ref: usize = (0..k).map(|i| block.leaf(i).unwrap().len).sum();
+    let leaf_at = block_at + header_bytes(kk) + 8 * first_ref;
+    let id_at = leaf_at + 4 * leaf.len;
+    let tile_at = offset(SectionKind::Tiles) + 4 * (j * n * n + tile_index);
     let beam_at = offset(SectionKind::Beams) + j * size_of::<BeamRecord>();
     let rotation_at = offset(SectionKind::Rotations) + j * 72;
     let lookup_index = r.lookup.iter().position(|&e| e != LOOKUP_NONE && (e & !LOOKUP_FLIP) as usize == j).unwrap();
     let lookup_at = offset(SectionKind::Lookup) + 4 * lookup_index;
-    let victim = r.triangle_ids[id_index];
-    for (what, at) in [("TILES", tile_at), ("LEAF_BOUNDS", bound_at), ("TRIANGLE_IDS", id_at), ("BEAMS", beam_at)] {
+    let victim = block.ids(leaf)[0];
+    assert_eq!(u32::from_le_bytes(bytes[id_at..id_at + 4].try_into().unwrap()), victim, "the offsets are the layout's");
+    for (what, at) in [("TILES", tile_at), ("LEAVES", id_at), ("BEAMS", beam_at)] {
         let e =
             r.table.iter().find(|e| (e.offset as usize..(e.offset + e.stored_length) as usize).contains(&at)).unwrap();
         assert!(at - e.offset as usize > e.stored_length as usize / 2, "{what}: the lie at {at} is not deep inside");
     }
+    // Where each leaf's refs start, and how many it has.
+    let leaf_starts: Vec<(usize, usize)> = (0..kk)
+        .map(|i| {
+            let before: usize = (0..i).map(|p| block.leaf(p).unwrap().len).sum();
+            (block_at + header_bytes(kk) + 8 * before, block.leaf(i).unwrap().len)
+        })
+        .collect();
+    let previous_entry = tiles[..tile_index].iter().rev().copied().find(|&e| e != EMPTY_TILE).unwrap();
+    let bound = |i: usize| block.bounds()[i];
 
     let lies = {
         let mut lies = Vec::new();
@@ -189,18 +201,33 @@ fn targeted_lies_deep_inside_sections() {
         lie("a triangle id equal to triangle_count", d, &|e| put(e, id_at, t_count));
         lie("a triangle id of u32::MAX", d, &|e| put(e, id_at, u32::MAX));
         lie("a wrong triangle id in range", d, &|e| put(e, id_at, (victim + 1) % t_count));
-        lie("a leaf bound past the end of TRIANGLE_IDS", d, &|e| put(e, bound_at + 4, u32::MAX));
-        lie("leaf bounds that decrease", d, &|e| put(e, bound_at, r.leaf_bounds[k + 1] + 1));
-        lie("a tile's first_leaf of u32::MAX", d, &|e| put(e, tile_at, u32::MAX));
-        lie("a tile's depth above the format's limit", d, &|e| put(e, tile_at + 8, 200u8));
-        lie("a tile's depth at the format's limit (2^24 leaves)", d, &|e| put(e, tile_at + 8, 24u8));
-        lie("a tile's z range inverted", d, &|e| put(e, tile_at + 4, [tile.z_hi, tile.z_lo]));
-        lie("a tile's z range shrunk to one level", d, &|e| put(e, tile_at + 6, tile.z_lo + 1));
-        lie("BEAMS leaf_base of u64::MAX", d, &|e| put(e, beam_at, u64::MAX));
-        lie("BEAMS id_base of u64::MAX", d, &|e| put(e, beam_at + 16, u64::MAX));
-        lie("BEAMS bases pointing at the previous direction", d, &|e| {
-            put(e, beam_at, r.beams[j - 1].leaf_base);
-            put(e, beam_at + 16, r.beams[j - 1].id_base);
+        lie("every box of a tile turned inside out", d, &|e| {
+            for (at, len) in &leaf_starts {
+                e.push((*at, vec![255u8; *len]));
+            }
+        });
+        lie("every box of a tile emptied", d, &|e| {
+            for (at, len) in &leaf_starts {
+                e.push((*at, vec![255u8; 2 * *len]));
+            }
+        });
+        lie("a leaf's end of u32::MAX", d, &|e| put(e, ends_at + 4 * k, u32::MAX));
+        lie("leaf ends that decrease", d, &|e| put(e, ends_at, u32::MAX - 1));
+        lie("a block's leaf count above the limit", d, &|e| put(e, block_at, MAX_LEAVES + 1));
+        lie("a block's leaf count at the limit", d, &|e| put(e, block_at, MAX_LEAVES));
+        lie("a block of no leaf", d, &|e| put(e, block_at, 0u32));
+        lie("a block's z range inverted", d, &|e| {
+            put(e, bounds_at, bound(kk));
+            put(e, bounds_at + 2 * kk, bound(0));
+        });
+        lie("leaf boundaries out of order", d, &|e| put(e, bounds_at + 2, u16::MAX));
+        lie("a block's z range shrunk to one level", d, &|e| put(e, bounds_at + 2 * kk, bound(0) + 1));
+        lie("a TILES entry past the end of LEAVES", d, &|e| put(e, tile_at, EMPTY_TILE - 1));
+        lie("a TILES entry pointing at the previous tile's block", d, &|e| put(e, tile_at, previous_entry));
+        lie("a TILES entry pointing into the middle of a block", d, &|e| put(e, tile_at, entry + 1));
+        lie("BEAMS leaves_base of u64::MAX", d, &|e| put(e, beam_at, u64::MAX));
+        lie("BEAMS leaves_base pointing at the previous direction", d, &|e| {
+            put(e, beam_at, r.beams[j - 1].leaves_base)
         });
         lie("a rotation of NaNs", d, &|e| put(e, rotation_at, [f64::NAN; 9]));
         lie("a rotation of zeros", d, &|e| put(e, rotation_at, [0.0f64; 9]));
@@ -215,11 +242,12 @@ fn targeted_lies_deep_inside_sections() {
         lie("a LOOKUP entry of 2^31 - 1", None, &|e| put(e, lookup_at, LOOKUP_FLIP - 1));
         lie("a LOOKUP entry erased", None, &|e| put(e, lookup_at, LOOKUP_NONE));
         lie("the scene's radius halved", None, &|e| put(e, offset(SectionKind::Scene) + 24, r.scene.radius / 2.0));
+        lie("the scene's box shrunk to a point", None, &|e| put(e, offset(SectionKind::Scene) + 32, [0.0f64; 6]));
         lie("a triangle's vertices of NaNs", None, &|e| {
-            put(e, offset(SectionKind::Triangles) + 48 * victim as usize, [f32::NAN; 12])
+            put(e, offset(SectionKind::Triangles) + 36 * victim as usize, [f32::NAN; 9])
         });
         lie("a triangle moved far away", None, &|e| {
-            put(e, offset(SectionKind::Triangles) + 48 * victim as usize, [1e6f32; 12])
+            put(e, offset(SectionKind::Triangles) + 36 * victim as usize, [1e6f32; 9])
         });
         lies
     };
@@ -243,6 +271,20 @@ fn targeted_lies_deep_inside_sections() {
         rays.push(ray);
         rays.push(Ray::new(far.map(|v| v as f32), d.map(|v| -v as f32)));
     }
+    // Rays along direction j straight at the victim triangle (the first ref of the leaf lied
+    // about), which a lie about its id or box must change for some of them.
+    let victim_world = honest.triangle(victim).unwrap();
+    for i in 0..16 {
+        let (a, b) = (rng.range(0.1, 0.4), rng.range(0.1, 0.4));
+        let p: [f64; 3] = std::array::from_fn(|k| {
+            victim_world[0][k]
+                + a * (victim_world[1][k] - victim_world[0][k])
+                + b * (victim_world[2][k] - victim_world[0][k])
+        });
+        let d = if i % 2 == 0 { [m[6], m[7], m[8]] } else { [-m[6], -m[7], -m[8]] };
+        let start: [f64; 3] = std::array::from_fn(|k| p[k] - 1e-3 * radius * d[k]);
+        rays.push(Ray::new(start.map(|v| v as f32), d.map(|v| v as f32)));
+    }
     let targeted = rays.len();
     assert!(rays.iter().all(|ray| honest.view().select_direction(ray.dir.map(f64::from)).unwrap().0 == j));
     rays.extend(Camera::outside(c, radius, 1.0).primary_rays(32, 32));
@@ -256,14 +298,14 @@ fn targeted_lies_deep_inside_sections() {
             lying[*at..*at + value.len()].copy_from_slice(value);
         }
         let field = Field::from_bytes(&lying).unwrap_or_else(|e| panic!("{}: the lie does not open: {e}", lie.what));
-        let tris: Vec<[[f32; 3]; 3]> =
-            field.reader().triangles.iter().map(|t| [t.vertex(0), t.vertex(1), t.vertex(2)]).collect();
+        let tris = vlf_tests::stored_triangles(&field);
+        let origin = field.origin();
         let mut touched = 0;
         for (i, ray) in rays.iter().enumerate() {
             let got = field.closest_hit(ray);
             let any = field.view().any_hit_counted(ray, &mut ());
             assert_eq!(field.any_hit(ray), any.is_some(), "{}", lie.what);
-            assert_sound(lie.what, &tris, ray, got, any);
+            assert_sound(lie.what, &tris, origin, ray, got, any);
             let seen = candidates(&field, ray);
             let confined =
                 lie.direction.is_some_and(|d| honest.view().select_direction(ray.dir.map(f64::from)).unwrap().0 != d);

@@ -121,8 +121,9 @@ fn field_kdtree_and_brute_force_render_identical_frames() {
     let lights = default_lights(&view, center, radius);
     let reference = frame(&field, &scene, &view, &lights);
 
-    let kdtree = KdTree::build(scene.triangles(), KdParams::default());
-    let brute = BruteForce { triangles: scene.triangles() };
+    // The same triangles in the same frame as the field's (relative to its origin).
+    let kdtree = KdTree::build(scene.triangles(), KdParams::default()).relative_to(scene.origin());
+    let brute = BruteForce::relative(scene.triangles(), scene.origin());
     let other_field = bake(dir.path(), &["cornell/cornell.obj"], 129, 48);
     let one_thread = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
     let candidates: [(&str, Frame); 4] = [

@@ -9,13 +9,16 @@ use vlf_bake::{DepthPolicy, MaterialDesc, SceneBuilder, SourceDesc, generate};
 use vlf_format::{CameraRecord, LightRecord, SectionKind, camera_kind, light_kind};
 use vlf_runtime::{CameraProjection, Field, LightKind};
 
+/// The optional sections a renderer reads.
+const RENDERING: [SectionKind; 3] = [SectionKind::Materials, SectionKind::Cameras, SectionKind::Lights];
+
 /// A box with one material, plus a camera and a spot light: a few KiB.
 fn field_bytes() -> Vec<u8> {
     let mut b = SceneBuilder::new();
     let input = b.begin_input("box.gltf", [7; 32]);
     let source = b.add_source(input, SourceDesc { material: 1, ..SourceDesc::program("box") });
     for (i, t) in generate::closed_box([0.0; 3], [1.0, 2.0, 3.0]).into_iter().enumerate() {
-        b.push_triangle(source, i as u64, t).unwrap();
+        b.push_triangle(source, i as u64, t.map(|v| v.map(f64::from))).unwrap();
     }
     let plain = MaterialDesc {
         name: "plain".into(),
@@ -128,21 +131,20 @@ fn the_runtime_reads_materials_cameras_and_lights() {
     assert_eq!((lights[0].name, lights[0].range), ("spot", None));
 }
 
-/// A 1.0 file is a 1.1 file without the new sections: the bunny's field (which has none) with
-/// its minor version set back to 0 opens, verifies and has no materials, cameras or lights.
+/// The rendering sections are optional: a field baked from inputs that define no material,
+/// camera or light holds none of them, opens, verifies, and has no materials, cameras or lights.
 #[test]
-fn a_version_1_0_field_reads_as_one_without_materials() {
+fn a_field_without_the_optional_sections_reads_as_one_without_materials() {
     let scene = vlf_bake::import::import_paths(&[vlf_tests::fixtures().join("meshes/small/groups.obj")]).unwrap();
     assert_eq!(scene.materials.len(), 2, "groups.obj has two materials");
     let without = vlf_bake::Scene { materials: Vec::new(), ..scene };
     let (dir, _) = vlf_tests::bake(&without, 3, 2, DepthPolicy { leaf_size: 2, max_depth: 3 });
-    let mut bytes = std::fs::read(dir.path().join("scene.vlf")).unwrap();
-    assert_eq!(u16::from_le_bytes([bytes[10], bytes[11]]), 1);
-    bytes[10..12].copy_from_slice(&0u16.to_le_bytes());
-    rehash_header(&mut bytes);
+    let bytes = std::fs::read(dir.path().join("scene.vlf")).unwrap();
     verify(&bytes).unwrap();
     let field = open(&bytes);
-    assert_eq!(field.reader().header.version_minor, 0);
+    for kind in RENDERING {
+        assert!(field.reader().entry(kind).is_none(), "{} written although empty", kind.name());
+    }
     assert!(field.reader().entry(SectionKind::Materials).is_none());
     // The sources still name material indices; without records, every triangle gets the default.
     assert_eq!(field.provenance(0).unwrap().material, Some(0));
@@ -190,7 +192,7 @@ fn verification_rejects_every_broken_rule_naming_the_section() {
 #[test]
 fn a_flipped_byte_in_the_rendering_sections_is_caught() {
     let bytes = field_bytes();
-    for kind in SectionKind::OPTIONAL {
+    for kind in RENDERING {
         let (_, offset, len) = section(&bytes, kind);
         for at in offset..offset + len {
             let mut damaged = bytes.clone();
@@ -208,7 +210,7 @@ fn lying_records_never_make_the_runtime_or_the_renderer_panic() {
     let mut rng = vlf_bake::generate::Rng::new(3);
     for round in 0..40 {
         let mut lying = bytes.clone();
-        for kind in SectionKind::OPTIONAL {
+        for kind in RENDERING {
             lying = edited(&lying, kind, |s| {
                 for b in s.iter_mut() {
                     *b = match round % 4 {

@@ -163,13 +163,13 @@ fn check_queries(field: &Field, ray: &Ray) {
     let first = view.any_hit_counted(ray, &mut stats);
     assert_eq!(first.is_some(), any, "any_hit_counted disagrees with any_hit for {ray:?}");
     // The work is bounded by the file, whatever it claims: a ray crosses at most 2n + 1 tiles, and
-    // visits in each at most the leaves LEAF_BOUNDS holds.
+    // visits in each at most the leaves a block may hold.
     let n = field.tile_resolution() as u64;
     assert!(stats.cells <= stats.rays * (2 * n + 1), "{} tiles visited by {} rays, n = {n}", stats.cells, stats.rays);
-    let leaf_bounds = field.reader().leaf_bounds.len() as u64;
+    let max_leaves = vlf_format::block::MAX_LEAVES as u64;
     assert!(
-        stats.leaves <= stats.cells * leaf_bounds.max(1),
-        "{} leaves visited in {} tiles, but LEAF_BOUNDS holds {leaf_bounds} bounds: {ray:?}",
+        stats.leaves <= stats.cells * max_leaves,
+        "{} leaves visited in {} tiles, but a block holds at most {max_leaves}: {ray:?}",
         stats.leaves,
         stats.cells
     );
@@ -251,7 +251,7 @@ fn nasty_rays(field: &Field) -> Vec<Ray> {
     // Aimed at the vertices, an edge midpoint and the centroid of the first triangles, from outside
     // and from inside the sphere.
     for id in 0..field.triangle_count().min(3) {
-        let t = field.triangle(id).expect("id below the count");
+        let t = field.triangle(id).expect("id below the count").map(|v| v.map(|c| c as f32));
         let mid = |a: [f32; 3], b: [f32; 3]| [0, 1, 2].map(|i| 0.5 * (a[i] + b[i]));
         let centroid = [0, 1, 2].map(|i| (t[0][i] + t[1][i] + t[2][i]) / 3.0);
         for target in [t[0], t[1], t[2], mid(t[0], t[1]), centroid] {
@@ -286,7 +286,10 @@ fn check_scene(scene: &Scene) {
     assert_eq!(scene.triangles.len(), scene.provenance.len());
     for t in &scene.triangles {
         let v = [t.vertex(0), t.vertex(1), t.vertex(2)];
-        assert!(v.iter().flatten().all(|c| c.is_finite() && c.abs() <= vlf_bake::scene::MAX_COORDINATE), "{v:?}");
+        assert!(
+            v.iter().flatten().all(|c| c.is_finite() && c.abs() as f64 <= 2.0 * vlf_bake::scene::MAX_COORDINATE),
+            "{v:?}"
+        );
         assert!(!vlf_geom::is_degenerate(v[0], v[1], v[2]), "a degenerate triangle was kept: {v:?}");
     }
     let string = |offset: u32, length: u32| {

@@ -37,9 +37,21 @@ pub struct OracleHit {
     pub min_bary: f64,
 }
 
-/// Möller–Trumbore in f64 against one triangle, on `[tmin, tmax]`, double-sided.
-pub fn oracle_triangle(ray: &Ray, tri: &[[f32; 3]; 3]) -> Option<(f64, f64)> {
-    let o = ray.org.map(f64::from);
+/// The ray's origin relative to `origin`, in f64 (exactly as the kernel computes it).
+fn local_origin(ray: &Ray, origin: [f64; 3]) -> [f64; 3] {
+    std::array::from_fn(|i| ray.org[i] as f64 - origin[i])
+}
+
+/// The ray's point at `t`, relative to `origin`, in f64.
+fn local_at(ray: &Ray, t: f64, origin: [f64; 3]) -> [f64; 3] {
+    let o = local_origin(ray, origin);
+    std::array::from_fn(|i| o[i] + t * ray.dir[i] as f64)
+}
+
+/// Möller–Trumbore in f64 against one triangle given relative to `origin`, on `[tmin, tmax]`,
+/// double-sided.
+pub fn oracle_triangle(ray: &Ray, tri: &[[f32; 3]; 3], origin: [f64; 3]) -> Option<(f64, f64)> {
+    let o = local_origin(ray, origin);
     let d = ray.dir.map(f64::from);
     let v: [[f64; 3]; 3] = tri.map(|p| p.map(f64::from));
     let e1 = sub(v[1], v[0]);
@@ -64,14 +76,14 @@ pub fn oracle_triangle(ray: &Ray, tri: &[[f32; 3]; 3]) -> Option<(f64, f64)> {
     Some((t, u.min(w).min(1.0 - u - w)))
 }
 
-/// The closest f64 hit over all triangles.
-pub fn oracle_closest(ray: &Ray, tris: &[[[f32; 3]; 3]]) -> Option<OracleHit> {
+/// The closest f64 hit over all triangles (relative to `origin`).
+pub fn oracle_closest(ray: &Ray, tris: &[[[f32; 3]; 3]], origin: [f64; 3]) -> Option<OracleHit> {
     if !ray.is_valid() {
         return None;
     }
     let mut best: Option<OracleHit> = None;
     for (i, t) in tris.iter().enumerate() {
-        if let Some((t, b)) = oracle_triangle(ray, t)
+        if let Some((t, b)) = oracle_triangle(ray, t, origin)
             && best.is_none_or(|h| t < h.t)
         {
             best = Some(OracleHit { t, prim: i as u32, min_bary: b });
@@ -104,32 +116,34 @@ fn edge_distance(p: [f64; 3], tri: &[[f32; 3]; 3]) -> f64 {
         .fold(f64::INFINITY, f64::min)
 }
 
-/// Largest magnitude among the ray origin, a point and a triangle's vertices.
-fn magnitude(ray: &Ray, p: [f64; 3], tri: &[[f32; 3]; 3]) -> f64 {
-    ray.org
+/// Largest magnitude among the ray origin, a point and a triangle's vertices (all relative to the
+/// triangles' origin).
+fn magnitude(ray: &Ray, p: [f64; 3], tri: &[[f32; 3]; 3], origin: [f64; 3]) -> f64 {
+    local_origin(ray, origin)
         .iter()
-        .map(|c| c.abs() as f64)
+        .map(|c| c.abs())
         .chain(p.iter().map(|c| c.abs()))
         .chain(tri.iter().flatten().map(|c| c.abs() as f64))
         .fold(0.0, f64::max)
 }
 
-/// Whether `ray.at(t)` lies within 64 f32 ulps of the problem's magnitude of `tri`'s plane.
-fn on_plane(ray: &Ray, t: f64, tri: &[[f32; 3]; 3]) -> bool {
-    let p = ray.at(t);
+/// Whether the ray's point at `t` lies within 64 f32 ulps of the problem's magnitude of `tri`'s
+/// plane.
+fn on_plane(ray: &Ray, t: f64, tri: &[[f32; 3]; 3], origin: [f64; 3]) -> bool {
+    let p = local_at(ray, t, origin);
     let v = tri.map(|q| q.map(f64::from));
     let n = cross(sub(v[1], v[0]), sub(v[2], v[0]));
     let dist = dot(n, sub(p, v[0])).abs() / dot(n, n).sqrt();
-    dist <= 64.0 * f32::EPSILON as f64 * magnitude(ray, p, tri)
+    dist <= 64.0 * f32::EPSILON as f64 * magnitude(ray, p, tri, origin)
 }
 
 /// Whether the hit on triangle `prim` at `t` lies within float precision of that triangle's
 /// edges: within 16 f32 ulps of the problem's magnitude (origin, hit point and vertices), where
 /// an f32 and an f64 intersector may legitimately disagree.
-fn grazes(ray: &Ray, t: f64, prim: u32, tris: &[[[f32; 3]; 3]]) -> bool {
+fn grazes(ray: &Ray, t: f64, prim: u32, tris: &[[[f32; 3]; 3]], origin: [f64; 3]) -> bool {
     let tri = &tris[prim as usize];
-    let p = ray.at(t);
-    edge_distance(p, tri) <= 16.0 * f32::EPSILON as f64 * magnitude(ray, p, tri)
+    let p = local_at(ray, t, origin);
+    edge_distance(p, tri) <= 16.0 * f32::EPSILON as f64 * magnitude(ray, p, tri, origin)
 }
 
 /// Counts of one comparison run.
@@ -157,9 +171,11 @@ impl Tally {
     }
 }
 
-/// Compares `accel` with both references on every ray.
-pub fn compare(accel: &dyn Intersector, tris: &[[[f32; 3]; 3]], rays: &[Ray]) -> Tally {
-    let brute = BruteForce { triangles: tris };
+/// Compares `accel` with both references on every ray: the brute force over `tris` relative to
+/// `origin` (a field's stored triangles and [`Field::origin`]; world triangles and zero for the
+/// kd-tree), bit for bit, and the f64 oracle to within float precision.
+pub fn compare(accel: &dyn Intersector, tris: &[[[f32; 3]; 3]], origin: [f64; 3], rays: &[Ray]) -> Tally {
+    let brute = BruteForce::relative(tris, origin);
     rays.par_chunks(512)
         .map(|chunk| {
             let mut t = Tally::default();
@@ -184,23 +200,23 @@ pub fn compare(accel: &dyn Intersector, tris: &[[[f32; 3]; 3]], rays: &[Ray]) ->
                 if want.is_some() {
                     t.hits += 1;
                 }
-                let oracle = oracle_closest(ray, tris);
+                let oracle = oracle_closest(ray, tris, origin);
                 let agree = match (want, oracle) {
                     (None, None) => true,
                     (Some(a), Some(b)) => {
-                        let scale = ray.org.iter().map(|c| c.abs() as f64).fold(1.0, f64::max)
+                        let scale = local_origin(ray, origin).iter().map(|c| c.abs()).fold(1.0, f64::max)
                             / ray.dir.iter().map(|c| c.abs() as f64).fold(0.0, f64::max);
                         (a.t as f64 - b.t).abs() <= 1e-5 * (b.t.abs() + scale)
                             // Same triangle, and the f32 hit point lies on its plane to float
                             // precision: a small backward error where t itself is ill-conditioned
                             // (a ray nearly parallel to the triangle).
-                            || (a.prim == b.prim && on_plane(ray, a.t as f64, &tris[a.prim as usize]))
+                            || (a.prim == b.prim && on_plane(ray, a.t as f64, &tris[a.prim as usize], origin))
                     }
                     _ => false,
                 };
                 if !agree {
-                    let grazing = want.is_some_and(|h| grazes(ray, h.t as f64, h.prim, tris))
-                        || oracle.is_some_and(|h| grazes(ray, h.t, h.prim, tris));
+                    let grazing = want.is_some_and(|h| grazes(ray, h.t as f64, h.prim, tris, origin))
+                        || oracle.is_some_and(|h| grazes(ray, h.t, h.prim, tris, origin));
                     if grazing {
                         t.ambiguous += 1;
                     } else {
@@ -263,12 +279,9 @@ fn to_f32(v: [f64; 3]) -> [f32; 3] {
 /// The ray families every scene is tested with, `per_family` rays each: origins inside and
 /// outside, random and aimed directions, finite and infinite intervals, rays exactly parallel to
 /// stored directions, rays along tile borders, rays aimed exactly at vertices and edge midpoints.
-pub fn ray_families(
-    field: &Field,
-    tris: &[[[f32; 3]; 3]],
-    per_family: usize,
-    seed: u64,
-) -> Vec<(&'static str, Vec<Ray>)> {
+pub fn ray_families(field: &Field, per_family: usize, seed: u64) -> Vec<(&'static str, Vec<Ray>)> {
+    let tris: Vec<[[f64; 3]; 3]> =
+        (0..field.triangle_count()).map(|i| field.triangle(i).expect("below the count")).collect();
     let mut rng = Rng::new(seed);
     let (c, r) = field.bounding_sphere();
     let reader = field.reader();
@@ -337,9 +350,9 @@ pub fn ray_families(
         .map(|_| {
             let t = &tris[(rng.next_u64() % tris.len() as u64) as usize];
             let target: [f64; 3] = match rng.next_u64() % 3 {
-                0 => t[(rng.next_u64() % 3) as usize].map(f64::from),
-                1 => std::array::from_fn(|k| 0.5 * (t[0][k] as f64 + t[1][k] as f64)),
-                _ => std::array::from_fn(|k| (t[0][k] as f64 + t[1][k] as f64 + t[2][k] as f64) / 3.0),
+                0 => t[(rng.next_u64() % 3) as usize],
+                1 => std::array::from_fn(|k| 0.5 * (t[0][k] + t[1][k])),
+                _ => std::array::from_fn(|k| (t[0][k] + t[1][k] + t[2][k]) / 3.0),
             };
             let o = if rng.unit() < 0.5 { in_ball(&mut rng, c, r) } else { in_ball(&mut rng, c, 3.0 * r) };
             Ray::new(to_f32(o), to_f32(sub(target, o)))
@@ -349,11 +362,19 @@ pub fn ray_families(
     fams
 }
 
-/// Runs every ray family against a field and asserts exactness.
-pub fn check_field(label: &str, field: &Field, tris: &[[[f32; 3]; 3]], per_family: usize, seed: u64) -> Tally {
+/// The triangles of a field as stored (relative to [`Field::origin`]).
+pub fn stored_triangles(field: &Field) -> Vec<[[f32; 3]; 3]> {
+    (0..field.triangle_count()).map(|i| field.triangle_local(i).expect("below the count")).collect()
+}
+
+/// Runs every ray family against a field and asserts exactness. `scene` is the scene the field
+/// was baked from: its triangles must be the field's.
+pub fn check_field(label: &str, field: &Field, scene: &[[[f32; 3]; 3]], per_family: usize, seed: u64) -> Tally {
+    let tris = stored_triangles(field);
+    assert_eq!(tris, scene, "{label}: the field stores the scene's triangles");
     let mut total = Tally::default();
-    for (family, rays) in ray_families(field, tris, per_family, seed) {
-        let tally = compare(field, tris, &rays);
+    for (family, rays) in ray_families(field, per_family, seed) {
+        let tally = compare(field, &tris, field.origin(), &rays);
         assert_exact(&format!("{label} / {family}"), &tally);
         total.add(tally);
     }

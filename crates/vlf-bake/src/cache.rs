@@ -111,6 +111,8 @@ pub struct CacheHit {
     pub statistics: vlf_format::StatisticsRecord,
     pub triangles: u64,
     pub dropped_degenerate: u64,
+    pub dropped_precision: u64,
+    pub dropped_duplicates: u64,
 }
 
 /// One entry, as `cache list` shows it.
@@ -224,6 +226,8 @@ impl Cache {
                 statistics: *r.statistics,
                 triangles: r.scene.triangle_count,
                 dropped_degenerate: r.scene.dropped_degenerate,
+                dropped_precision: r.scene.dropped_precision,
+                dropped_duplicates: r.scene.dropped_duplicates,
             })
         });
         match checked {

@@ -108,6 +108,8 @@ pub fn run_bake_job(job: &BakeJob<'_>, progress: &dyn Progress) -> Result<BakeOu
                     output: output.to_path_buf(),
                     triangles: hit.triangles,
                     dropped_degenerate: hit.dropped_degenerate,
+                    dropped_precision: hit.dropped_precision,
+                    dropped_duplicates: hit.dropped_duplicates,
                     directions: p.direction_count,
                     lattice_n: p.lattice_n,
                     tile_resolution: p.tile_resolution,

@@ -40,23 +40,13 @@ const SAMPLE_DIRECTIONS: usize = 8;
 pub const LADDER: [(u32, u32); 9] =
     [(2, 16), (4, 16), (4, 32), (8, 32), (8, 64), (8, 128), (16, 128), (16, 256), (32, 256)];
 
-/// How deep each tile's 1D BSP goes (`formats/vlf.md` §6.3): a tile with `m` triangles gets the
-/// smallest depth `D ≤ max_depth` with `leaf_size · 2^D ≥ m`.
+/// How a tile's z range is cut into leaves (`formats/vlf.md` §6.3, [`crate::leaves`]): a leaf of
+/// at most `leaf_size` refs is not split, and splits go at most `max_depth` deep (a tile has at
+/// most `2^max_depth` leaves). `max_depth = 0` gives the paper's "linear tiles", one leaf each.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
 pub struct DepthPolicy {
     pub leaf_size: u32,
     pub max_depth: u32,
-}
-
-impl DepthPolicy {
-    /// The depth of a tile with `m` distinct triangles (`formats/vlf.md` §6.3).
-    pub fn depth_for(&self, m: u64) -> u32 {
-        let mut depth = 0;
-        while depth < self.max_depth && (self.leaf_size as u64) << depth < m {
-            depth += 1;
-        }
-        depth
-    }
 }
 
 impl Default for DepthPolicy {
@@ -432,7 +422,7 @@ mod tests {
     #[test]
     fn explicit_parameters_whose_lower_bound_exceeds_max_bytes_are_refused() {
         let lb = lower_bound_bytes(1000, 4, 16);
-        assert_eq!(lb, 33 * (16 * 256 + 4 * 1000 + 32 + 16 + 72) + 56 * 1000);
+        assert_eq!(lb, 33 * (32 + 4 * 256 + 8 * 1000 + 16 + 72) + 44 * 1000);
         let fits = BakeConfig { directions: Some(33), tiles: Some(16), max_bytes: lb, ..BakeConfig::default() };
         assert!(choose(&Unmeasured, &fits).is_ok(), "the bound itself fits");
         let config = BakeConfig { max_bytes: lb - 1, ..fits };
@@ -449,7 +439,7 @@ mod tests {
         );
         assert_eq!(
             e.to_string(),
-            "33 directions × 16² tiles need at least 319.5 KiB for 1000 triangles, over the --max-bytes budget of 319.5 KiB"
+            "33 directions × 16² tiles need at least 337.6 KiB for 1000 triangles, over the --max-bytes budget of 337.6 KiB"
         );
     }
 
@@ -555,7 +545,7 @@ mod tests {
             (BakeConfig { tiles: Some(0), ..d }, ParamsError::Tiles(0), "--tiles 0 is outside 1..=65536"),
             (BakeConfig { tiles: Some(65537), ..d }, ParamsError::Tiles(65537), "--tiles 65537 is outside"),
             (depth(0, 8), ParamsError::LeafSize, "--leaf-size must be at least 1"),
-            (depth(4, 25), ParamsError::MaxDepth(25), "--max-depth 25 exceeds the format's limit of 24"),
+            (depth(4, 13), ParamsError::MaxDepth(13), "--max-depth 13 exceeds the format's limit of 12"),
             (
                 BakeConfig { max_bytes: 0, ..d },
                 ParamsError::Budget,
@@ -583,34 +573,5 @@ mod tests {
         assert!(!request.is_automatic());
         let half = BakeConfig { tiles: Some(64), ..BakeConfig::default() }.request();
         assert!(half.is_automatic(), "the directions are still chosen");
-    }
-
-    #[test]
-    fn a_tile_gets_the_smallest_depth_whose_leaves_hold_leaf_size_triangles() {
-        let policy = DepthPolicy { leaf_size: 4, max_depth: 8 };
-        for (m, depth) in
-            [(0, 0), (1, 0), (4, 0), (5, 1), (8, 1), (9, 2), (16, 2), (17, 3), (1024, 8), (1025, 8), (1 << 40, 8)]
-        {
-            assert_eq!(policy.depth_for(m), depth, "{m} triangles");
-        }
-        let linear = DepthPolicy { leaf_size: 4, max_depth: 0 };
-        assert_eq!(linear.depth_for(1_000_000), 0, "--max-depth 0: the paper's linear tiles");
-        let single = DepthPolicy { leaf_size: 1, max_depth: MAX_DEPTH };
-        assert_eq!((single.depth_for(2), single.depth_for(3), single.depth_for(1 << 30)), (1, 2, MAX_DEPTH));
-    }
-
-    #[test]
-    fn the_depth_is_minimal_and_bounded_for_every_policy() {
-        for leaf_size in [1, 2, 3, 4, 7, 16] {
-            for max_depth in [0, 1, 5, 8, MAX_DEPTH] {
-                let policy = DepthPolicy { leaf_size, max_depth };
-                for m in 0..3000u64 {
-                    let d = policy.depth_for(m);
-                    assert!(d <= max_depth, "{policy:?}, {m}: depth {d}");
-                    assert!(d == max_depth || (leaf_size as u64) << d >= m, "{policy:?}, {m}: leaves too small");
-                    assert!(d == 0 || (leaf_size as u64) << (d - 1) < m, "{policy:?}, {m}: not the smallest depth");
-                }
-            }
-        }
     }
 }

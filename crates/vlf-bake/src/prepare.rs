@@ -1,16 +1,20 @@
-//! Scene preparation: the scene's bounding sphere, and its triangles as indices into unique
-//! vertices relative to the sphere's centre, computed once for all directions.
+//! Scene preparation: the scene's bounding sphere around its centre, and its triangles as indices
+//! into unique vertices (relative to the centre, as stored), computed once for all directions.
 
 use crate::scene::Scene;
 
-/// The scene prepared once for all directions: unique vertices relative to the sphere centre and
+/// The scene prepared once for all directions: unique vertices relative to the scene's centre and
 /// triangles as vertex indices.
 pub struct Prepared<'a> {
     pub scene: &'a Scene,
+    /// The scene's centre, world units (`Scene::center`): the sphere's centre and the origin of
+    /// every coordinate below.
     pub center: [f64; 3],
+    /// The radius of the sphere around the centre that holds every vertex.
     pub radius: f64,
+    /// The box around every vertex, relative to the centre.
     pub aabb: ([f64; 3], [f64; 3]),
-    /// Unique vertex positions minus the centre, in f64.
+    /// Unique vertex positions as stored (relative to the centre), in f64.
     pub(crate) vertices: Vec<[f64; 3]>,
     /// Each triangle's three indices into `vertices`, in triangle-id order.
     pub(crate) triangles: Vec<[u32; 3]>,
@@ -34,20 +38,19 @@ impl<'a> Prepared<'a> {
             }
             triangles.push(tri);
         }
+        let vertices: Vec<[f64; 3]> = unique.iter().map(|v| v.map(f64::from)).collect();
         let mut lo = [f64::INFINITY; 3];
         let mut hi = [f64::NEG_INFINITY; 3];
-        for v in &unique {
+        for v in &vertices {
             for i in 0..3 {
-                lo[i] = lo[i].min(v[i] as f64);
-                hi[i] = hi[i].max(v[i] as f64);
+                lo[i] = lo[i].min(v[i]);
+                hi[i] = hi[i].max(v[i]);
             }
         }
-        let center: [f64; 3] = std::array::from_fn(|i| 0.5 * (lo[i] + hi[i]));
-        let vertices: Vec<[f64; 3]> = unique.iter().map(|v| std::array::from_fn(|i| v[i] as f64 - center[i])).collect();
         let r2 = vertices.iter().map(|v| v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).fold(0.0f64, f64::max);
         // Grown a little so every vertex is strictly inside despite rounding.
         let radius = r2.sqrt() * (1.0 + 1e-9) + f64::MIN_POSITIVE;
-        Prepared { scene, center, radius, aabb: (lo, hi), vertices, triangles }
+        Prepared { scene, center: scene.center, radius, aabb: (lo, hi), vertices, triangles }
     }
 
     pub fn triangle_count(&self) -> usize {

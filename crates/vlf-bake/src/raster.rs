@@ -1,12 +1,13 @@
 //! Conservative rasterisation of a projected triangle into the tile grid (paper §3.2, Figure 1),
-//! with each tile's z range from clipping the triangle to the tile's prism (paper §5).
+//! with the box of the triangle's part in each tile's prism: its z range (paper §5) and its
+//! `(u, v)` extent, which the tile's block stores quantized (`formats/vlf.md` §5.6).
 //!
 //! The paper walks each edge through the grid with an 8-connected traversal and fills the inside,
 //! so that every tile the projected triangle touches is found, even at a corner. We get the same
 //! set exactly by clipping: for each row of tiles, clip the triangle (a 3D polygon in tile
 //! units) to the row's slab and take the x range of what remains; for each tile of that range,
-//! clip again to the column's slab, and the z range of the remaining polygon is the triangle's z
-//! range inside the tile. Slabs are grown by the margin `e` (in tile units) so that the rounding of
+//! clip again to the column's slab, and the box of the remaining polygon is the box of the
+//! triangle's part inside the tile. Slabs are grown by the margin `e` (in tile units) so that the rounding of
 //! any reader stays inside (`formats/vlf.md` §6.2). Triangles seen edge-on project to a segment;
 //! clipping handles them like any other polygon, where edge functions would miss them.
 
@@ -64,29 +65,32 @@ impl Poly {
         clip_plane(&mid, axis, hi, -1.0, out);
     }
 
-    /// The range of `z` over the part of the polygon with `lo ≤ p[axis] ≤ hi`, or `None` if that
-    /// part is empty. The extremes of a linear function over a convex polygon clipped by a slab lie
-    /// at the clipped polygon's vertices: original vertices inside the slab and the crossings of
-    /// edges with the slab's planes, so no polygon is built.
-    pub fn z_range_in_slab(&self, axis: usize, lo: f64, hi: f64) -> Option<(f64, f64)> {
-        let (mut zmin, mut zmax) = (f64::INFINITY, f64::NEG_INFINITY);
+    /// The ranges of `v` and `z` over the part of the polygon with `lo ≤ u ≤ hi`, or `None` if
+    /// that part is empty. The extremes of a linear function over a convex polygon clipped by a
+    /// slab lie at the clipped polygon's vertices: original vertices inside the slab and the
+    /// crossings of edges with the slab's planes, so no polygon is built.
+    pub fn vz_ranges_in_u_slab(&self, lo: f64, hi: f64) -> Option<[(f64, f64); 2]> {
+        let mut r = [(f64::INFINITY, f64::NEG_INFINITY); 2];
+        let mut take = |p: P| {
+            for (k, axis) in [1, 2].into_iter().enumerate() {
+                r[k] = (r[k].0.min(p[axis]), r[k].1.max(p[axis]));
+            }
+        };
         let pts = self.points();
         for (i, &p) in pts.iter().enumerate() {
-            if p[axis] >= lo && p[axis] <= hi {
-                zmin = zmin.min(p[2]);
-                zmax = zmax.max(p[2]);
+            if p[0] >= lo && p[0] <= hi {
+                take(p);
             }
             let q = pts[(i + 1) % pts.len()];
             for at in [lo, hi] {
-                let (dp, dq) = (p[axis] - at, q[axis] - at);
+                let (dp, dq) = (p[0] - at, q[0] - at);
                 if (dp < 0.0 && dq > 0.0) || (dp > 0.0 && dq < 0.0) {
-                    let z = p[2] + dp / (dp - dq) * (q[2] - p[2]);
-                    zmin = zmin.min(z);
-                    zmax = zmax.max(z);
+                    let f = dp / (dp - dq);
+                    take([at, p[1] + f * (q[1] - p[1]), p[2] + f * (q[2] - p[2])]);
                 }
             }
         }
-        (zmin <= zmax).then_some((zmin, zmax))
+        (r[1].0 <= r[1].1).then_some(r)
     }
 }
 
@@ -113,11 +117,20 @@ fn clip_plane(poly: &Poly, axis: usize, at: f64, sign: f64, out: &mut Poly) {
     }
 }
 
-/// Calls `emit(column, row, z_lo, z_hi)` for every tile of an `n × n` grid whose closed square,
-/// grown by `e` tile units on every side, meets the triangle `a, b, c`; `z_lo..z_hi` is the z range
-/// of the triangle inside that grown prism. Tiles are emitted row by row, columns ascending.
+/// The box of a triangle's part in one tile's grown prism: ranges of `u`, `v` (tile units) and
+/// `z` (world units).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Part {
+    pub u: (f64, f64),
+    pub v: (f64, f64),
+    pub z: (f64, f64),
+}
+
+/// Calls `emit(column, row, part)` for every tile of an `n × n` grid whose closed square, grown by
+/// `e` tile units on every side, meets the triangle `a, b, c`; `part` is the box of the triangle
+/// inside that grown prism. Tiles are emitted row by row, columns ascending.
 #[inline]
-pub fn rasterize(a: P, b: P, c: P, n: u32, e: f64, mut emit: impl FnMut(u32, u32, f64, f64)) {
+pub fn rasterize(a: P, b: P, c: P, n: u32, e: f64, mut emit: impl FnMut(u32, u32, Part)) {
     let last = n as f64 - 1.0;
     // Smallest and largest tile index whose grown closed interval [k − e, k + 1 + e] meets [lo, hi].
     let first_cell = |lo: f64| ceil(lo - e - 1.0).clamp(0.0, last) as u32;
@@ -129,8 +142,7 @@ pub fn rasterize(a: P, b: P, c: P, n: u32, e: f64, mut emit: impl FnMut(u32, u32
     let tri = Poly::triangle(a, b, c);
     if ix0 == ix1 && iy0 == iy1 {
         // The whole triangle lies in one tile's grown prism: no clipping needed.
-        let (z0, z1) = tri.range(2);
-        emit(ix0, iy0, z0, z1);
+        emit(ix0, iy0, Part { u: tri.range(0), v: tri.range(1), z: tri.range(2) });
         return;
     }
     let mut row = Poly::EMPTY;
@@ -147,14 +159,16 @@ pub fn rasterize(a: P, b: P, c: P, n: u32, e: f64, mut emit: impl FnMut(u32, u32
         let (ru0, ru1) = row.range(0);
         let (cx0, cx1) = (first_cell(ru0).max(ix0), last_cell(ru1).min(ix1));
         if cx0 == cx1 {
-            let (z0, z1) = row.range(2);
-            emit(cx0, iy, z0, z1);
+            emit(cx0, iy, Part { u: (ru0, ru1), v: row.range(1), z: row.range(2) });
             continue;
         }
         for ix in cx0..=cx1 {
-            // Rounding at a corner can leave the slab empty: the row's range is a safe superset.
-            let (z0, z1) = row.z_range_in_slab(0, ix as f64 - e, ix as f64 + 1.0 + e).unwrap_or_else(|| row.range(2));
-            emit(ix, iy, z0, z1);
+            let (lo, hi) = (ix as f64 - e, ix as f64 + 1.0 + e);
+            // A convex polygon's u extent clipped to a u slab is its extent cut to the slab.
+            let u = (ru0.max(lo), ru1.min(hi));
+            // Rounding at a corner can leave the slab empty: the row's ranges are a safe superset.
+            let [v, z] = row.vz_ranges_in_u_slab(lo, hi).unwrap_or_else(|| [row.range(1), row.range(2)]);
+            emit(ix, iy, Part { u, v, z });
         }
     }
 }
@@ -165,7 +179,7 @@ mod tests {
 
     fn tiles_of(a: P, b: P, c: P, n: u32, e: f64) -> Vec<(u32, u32)> {
         let mut v = Vec::new();
-        rasterize(a, b, c, n, e, |x, y, _, _| v.push((x, y)));
+        rasterize(a, b, c, n, e, |x, y, _| v.push((x, y)));
         v
     }
 
@@ -216,11 +230,44 @@ mod tests {
     }
 
     #[test]
-    fn z_range_is_clipped_to_the_prism() {
-        // A triangle sloping in z across tiles 0..4 of row 0: tile 1 sees only its slice.
-        let mut ranges = Vec::new();
-        rasterize([0.0, 0.2, 0.0], [4.0, 0.2, 4.0], [0.0, 0.8, 0.0], 4, 0.0, |x, _, z0, z1| ranges.push((x, z0, z1)));
-        let t1 = ranges.iter().find(|r| r.0 == 1).unwrap();
-        assert!(t1.1 >= 1.0 - 1e-12 && t1.2 <= 2.0 + 1e-12, "{t1:?}");
+    fn the_box_is_clipped_to_the_prism() {
+        // A triangle sloping in z across tiles 0..4 of row 0: tile 1 sees only its slice, whose
+        // v extent narrows as u grows (the edge from (0, 0.8) to (4, 0.2)).
+        let mut parts = Vec::new();
+        rasterize([0.0, 0.2, 0.0], [4.0, 0.2, 4.0], [0.0, 0.8, 0.0], 4, 0.0, |x, _, p| parts.push((x, p)));
+        let (_, t1) = parts.iter().find(|r| r.0 == 1).unwrap();
+        assert!(t1.z.0 >= 1.0 - 1e-12 && t1.z.1 <= 2.0 + 1e-12, "{t1:?}");
+        assert!(t1.u.0 >= 1.0 - 1e-12 && t1.u.1 <= 2.0 + 1e-12, "{t1:?}");
+        assert!((t1.v.0 - 0.2).abs() < 1e-12 && (t1.v.1 - 0.65).abs() < 1e-12, "{t1:?}");
+    }
+
+    /// Every sampled point of the triangle inside a tile's prism lies in that tile's box.
+    #[test]
+    fn every_point_in_a_tile_lies_in_its_box() {
+        let mut state = 99u64;
+        let mut rnd = |s: f64| {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64 * s
+        };
+        for _ in 0..300 {
+            let a = [rnd(8.0), rnd(8.0), rnd(1.0)];
+            let b = [a[0] + rnd(4.0) - 2.0, a[1] + rnd(4.0) - 2.0, rnd(1.0)];
+            let c = [a[0] + rnd(4.0) - 2.0, a[1] + rnd(4.0) - 2.0, rnd(1.0)];
+            let mut parts = Vec::new();
+            rasterize(a, b, c, 8, 1e-9, |x, y, p| parts.push((x, y, p)));
+            for i in 0..=40 {
+                for j in 0..=(40 - i) {
+                    let (s, t) = (i as f64 / 40.0, j as f64 / 40.0);
+                    let p: [f64; 3] = std::array::from_fn(|k| a[k] + s * (b[k] - a[k]) + t * (c[k] - a[k]));
+                    if p[0] < 0.0 || p[1] < 0.0 || p[0] >= 8.0 || p[1] >= 8.0 {
+                        continue;
+                    }
+                    let (x, y) = (p[0].floor() as u32, p[1].floor() as u32);
+                    let (_, _, part) = parts.iter().find(|q| q.0 == x && q.1 == y).expect("tile emitted");
+                    let inside = |r: (f64, f64), v: f64| r.0 - 1e-9 <= v && v <= r.1 + 1e-9;
+                    assert!(inside(part.u, p[0]) && inside(part.v, p[1]) && inside(part.z, p[2]), "{p:?} {part:?}");
+                }
+            }
+        }
     }
 }

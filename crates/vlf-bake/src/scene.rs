@@ -1,19 +1,27 @@
-//! The canonical scene a bake consumes: world-space triangles in import order, with provenance.
+//! The canonical scene a bake consumes: triangles in import order, relative to the scene's
+//! centre, with provenance.
 //!
-//! Importers feed a [`SceneBuilder`]; it validates every vertex (finite, not huge), drops
-//! zero-area triangles with a count, and records where each kept triangle came from, plus the
-//! materials, cameras and lights the inputs define. The bytes of the resulting [`Scene`] are what
-//! the TRIANGLES, PROVENANCE, SOURCES, INPUTS, STRINGS, MATERIALS, CAMERAS and LIGHTS sections
-//! hold, and what the input hash covers.
+//! Importers feed a [`SceneBuilder`] world-space triangles in f64; it validates every vertex
+//! (finite, not huge), drops zero-area triangles with a count, and records where each kept
+//! triangle came from, plus the materials, cameras and lights the inputs define. When the inputs
+//! are done ([`SceneBuilder::finish`]) it places the scene: the centre of its box (kept in f64)
+//! becomes the origin of the stored f32 triangles (`formats/vlf.md` §5.7), so a scene far from the
+//! world's origin keeps the precision of its own size. A triangle that collapses to zero area in
+//! f32 even so is dropped and counted as a loss of precision, and a triangle with the same
+//! vertices as an earlier one is merged into it and counted. The bytes of the resulting [`Scene`]
+//! are what the SCENE's counts, TRIANGLES, PROVENANCE, SOURCES, INPUTS, STRINGS, MATERIALS,
+//! CAMERAS and LIGHTS sections hold, and what the input hash covers.
 
+use std::collections::HashMap;
 use std::path::PathBuf;
 use vlf_format::{
-    CameraRecord, InputRecord, LightRecord, MaterialRecord, NO_INDEX, ProvenanceRecord, SourceRecord, TriangleRecord,
+    CameraRecord, DuplicateRecord, InputRecord, LightRecord, MaterialRecord, NO_INDEX, ProvenanceRecord, SourceRecord,
+    TriangleRecord,
 };
 
-/// Coordinates beyond this magnitude are refused: the f32 kernel cannot resolve such scenes, and
-/// products of coordinates would overflow f32.
-pub const MAX_COORDINATE: f32 = 1.0e18;
+/// Coordinates beyond this magnitude are refused: rays are f32 records (`formats/rays.md`), which
+/// cannot place an origin so far away with any precision.
+pub const MAX_COORDINATE: f64 = 1.0e18;
 
 /// Everything that can go wrong turning files into a scene. Each variant names the file and,
 /// where it applies, the object and element at fault.
@@ -35,7 +43,7 @@ pub enum ImportError {
     #[error(
         "{path}: {source_name}, triangle {triangle}: vertex {vertex} coordinate {value:?} exceeds ±{max:e}, too large for f32 ray tracing"
     )]
-    TooLarge { path: PathBuf, source_name: String, triangle: u64, vertex: usize, value: [f32; 3], max: f32 },
+    TooLarge { path: PathBuf, source_name: String, triangle: u64, vertex: usize, value: [f32; 3], max: f64 },
     #[error("{path}: {location}: index {index} is out of range (the mesh has {count} vertices)")]
     IndexOutOfRange { path: PathBuf, location: String, index: u64, count: u64 },
     #[error("{path}: {location} requires the unsupported extension {extension}")]
@@ -102,8 +110,13 @@ impl MaterialDesc {
 /// Facts about an import that are not errors.
 #[derive(Clone, Debug, Default, PartialEq, Eq, serde::Serialize)]
 pub struct ImportReport {
-    /// Zero-area triangles dropped.
+    /// Zero-area triangles dropped (zero area in the inputs' own f64 coordinates).
     pub dropped_degenerate: u64,
+    /// Triangles dropped because they have zero area once stored in f32 relative to the scene's
+    /// centre: a loss of precision (a triangle far smaller than the scene), not an input defect.
+    pub dropped_precision: u64,
+    /// Triangles with the same three stored vertices as an earlier triangle, merged into it.
+    pub dropped_duplicates: u64,
     /// Point primitives skipped (glTF).
     pub skipped_points: u64,
     /// Line primitives skipped (glTF; OBJ `l` lines are ignored by the parser and not counted).
@@ -115,6 +128,9 @@ pub struct ImportReport {
 /// A scene ready to bake.
 #[derive(Clone, Debug, Default)]
 pub struct Scene {
+    /// The centre of the box around every input vertex, world units: the origin of `triangles`.
+    pub center: [f64; 3],
+    /// The triangles relative to `center`, as TRIANGLES stores them.
     pub triangles: Vec<TriangleRecord>,
     pub provenance: Vec<ProvenanceRecord>,
     pub sources: Vec<SourceRecord>,
@@ -124,13 +140,21 @@ pub struct Scene {
     pub materials: Vec<MaterialRecord>,
     pub cameras: Vec<CameraRecord>,
     pub lights: Vec<LightRecord>,
+    /// The triangles merged into an earlier one with the same vertices, and where they came from.
+    pub duplicates: Vec<DuplicateRecord>,
     pub report: ImportReport,
 }
 
 impl Scene {
-    /// A scene from bare triangles, for programs and tests: one input named `name`. Zero-area
-    /// triangles are dropped and counted, like an importer does.
+    /// A scene from bare triangles in world coordinates, for programs and tests: one input named
+    /// `name`. Zero-area triangles are dropped and counted, like an importer does.
     pub fn from_triangles(name: &str, triangles: &[[[f32; 3]; 3]]) -> Result<Scene, ImportError> {
+        let wide: Vec<[[f64; 3]; 3]> = triangles.iter().map(|t| t.map(|v| v.map(f64::from))).collect();
+        Scene::from_triangles_f64(name, &wide)
+    }
+
+    /// [`Scene::from_triangles`] from f64 coordinates (a scene far from the origin).
+    pub fn from_triangles_f64(name: &str, triangles: &[[[f64; 3]; 3]]) -> Result<Scene, ImportError> {
         let mut b = SceneBuilder::new();
         let input = b.begin_input(name, *blake3::hash(bytemuck::cast_slice(triangles)).as_bytes());
         let source = b.add_source(input, SourceDesc::program(name));
@@ -140,9 +164,17 @@ impl Scene {
         b.finish()
     }
 
-    /// The vertices of every triangle, for brute-force references.
+    /// The vertices of every triangle as stored, relative to [`Scene::center`]: with
+    /// `vlf_geom::BruteForce::relative(&vertices, scene.center)`, the brute-force reference of a
+    /// field baked from this scene.
     pub fn vertices(&self) -> Vec<[[f32; 3]; 3]> {
-        self.triangles.iter().map(|t| [t.vertex(0), t.vertex(1), t.vertex(2)]).collect()
+        self.triangles.iter().map(|t| t.v).collect()
+    }
+
+    /// The vertices of every triangle in world coordinates (stored vertex + centre, in f64).
+    pub fn world_vertices(&self) -> Vec<[[f64; 3]; 3]> {
+        let c = self.center;
+        self.triangles.iter().map(|t| t.v.map(|v| std::array::from_fn(|i| v[i] as f64 + c[i]))).collect()
     }
 
     pub fn len(&self) -> usize {
@@ -158,6 +190,9 @@ impl Scene {
 #[derive(Debug, Default)]
 pub struct SceneBuilder {
     scene: Scene,
+    /// The kept triangles in world coordinates, with their provenance, until [`Self::finish`]
+    /// places them relative to the centre.
+    world: Vec<([[f64; 3]; 3], ProvenanceRecord)>,
     /// Source path of each input, for error messages (never stored in the field).
     paths: Vec<PathBuf>,
 }
@@ -228,9 +263,9 @@ impl SceneBuilder {
         self.scene.lights.push(light);
     }
 
-    /// Adds triangle number `index` of `source`. Refuses non-finite or huge coordinates; drops a
-    /// zero-area triangle and counts it.
-    pub fn push_triangle(&mut self, source: u32, index: u64, v: [[f32; 3]; 3]) -> Result<(), ImportError> {
+    /// Adds triangle number `index` of `source`, in world coordinates. Refuses non-finite or huge
+    /// coordinates; drops a zero-area triangle and counts it.
+    pub fn push_triangle(&mut self, source: u32, index: u64, v: [[f64; 3]; 3]) -> Result<(), ImportError> {
         for (k, p) in v.iter().enumerate() {
             if !p.iter().all(|c| c.is_finite()) {
                 return Err(ImportError::NonFinite {
@@ -238,7 +273,8 @@ impl SceneBuilder {
                     source_name: self.source_name(source),
                     triangle: index,
                     vertex: k,
-                    value: *p,
+                    // Shown as the file wrote it (glTF and most OBJ files hold f32).
+                    value: p.map(|c| c as f32),
                 });
             }
             if p.iter().any(|c| c.abs() > MAX_COORDINATE) {
@@ -247,22 +283,19 @@ impl SceneBuilder {
                     source_name: self.source_name(source),
                     triangle: index,
                     vertex: k,
-                    value: *p,
+                    value: p.map(|c| c as f32),
                     max: MAX_COORDINATE,
                 });
             }
         }
-        if vlf_geom::is_degenerate(v[0], v[1], v[2]) {
+        if zero_area(&v) {
             self.scene.report.dropped_degenerate += 1;
             return Ok(());
         }
-        if self.scene.triangles.len() as u64 >= u32::MAX as u64 {
+        if self.world.len() as u64 >= u32::MAX as u64 {
             return Err(ImportError::TooManyTriangles { max: u32::MAX as u64 - 1 });
         }
-        let input = self.scene.sources[source as usize].input as usize;
-        self.scene.inputs[input].triangle_count += 1;
-        self.scene.triangles.push(TriangleRecord::new(v[0], v[1], v[2]));
-        self.scene.provenance.push(ProvenanceRecord { source, index: index.min(u32::MAX as u64) as u32 });
+        self.world.push((v, ProvenanceRecord { source, index: index.min(u32::MAX as u64) as u32 }));
         Ok(())
     }
 
@@ -273,17 +306,79 @@ impl SceneBuilder {
 
     /// Number of triangles kept so far.
     pub fn triangle_count(&self) -> usize {
-        self.scene.triangles.len()
+        self.world.len()
     }
 
-    /// The finished scene; an error if it holds no triangle.
-    pub fn finish(self) -> Result<Scene, ImportError> {
+    /// The finished scene: placed relative to the centre of its box, triangles that collapse in
+    /// f32 dropped and duplicates merged (both counted, with a warning). An error if no triangle
+    /// is left.
+    pub fn finish(mut self) -> Result<Scene, ImportError> {
+        let mut lo = [f64::INFINITY; 3];
+        let mut hi = [f64::NEG_INFINITY; 3];
+        for (t, _) in &self.world {
+            for v in t {
+                for i in 0..3 {
+                    lo[i] = lo[i].min(v[i]);
+                    hi[i] = hi[i].max(v[i]);
+                }
+            }
+        }
+        let center: [f64; 3] = std::array::from_fn(|i| if lo[i] <= hi[i] { 0.5 * (lo[i] + hi[i]) } else { 0.0 });
+        self.scene.center = center;
+        // Key: the three stored vertices' bits, sorted, so any order of the same corners matches.
+        let mut seen: HashMap<[[u32; 3]; 3], u32> = HashMap::with_capacity(self.world.len());
+        let report = &mut self.scene.report;
+        for (t, provenance) in std::mem::take(&mut self.world) {
+            let stored = t.map(|v| std::array::from_fn(|i| (v[i] - center[i]) as f32));
+            if vlf_geom::is_degenerate(stored[0], stored[1], stored[2]) {
+                report.dropped_precision += 1;
+                continue;
+            }
+            let mut key = stored.map(|v| v.map(f32::to_bits));
+            key.sort_unstable();
+            let id = self.scene.triangles.len() as u32;
+            if let Some(&kept) = seen.get(&key) {
+                report.dropped_duplicates += 1;
+                let (source, index) = (provenance.source, provenance.index);
+                self.scene.duplicates.push(DuplicateRecord { triangle: kept, source, index });
+                continue;
+            }
+            seen.insert(key, id);
+            let input = self.scene.sources[provenance.source as usize].input as usize;
+            self.scene.inputs[input].triangle_count += 1;
+            self.scene.triangles.push(TriangleRecord::new(stored[0], stored[1], stored[2]));
+            self.scene.provenance.push(provenance);
+        }
+        if report.dropped_precision > 0 {
+            report.warnings.push(format!(
+                "{} collapsed to zero area when stored in f32 relative to the scene's centre (a loss of \
+                 precision: too small for the scene's extent) and were dropped",
+                count(report.dropped_precision, "triangle", "triangles")
+            ));
+        }
+        if report.dropped_duplicates > 0 {
+            report.warnings.push(format!(
+                "{} the same three vertices as an earlier triangle and were merged into it \
+                 (a ray cannot tell them apart; the field keeps where each came from)",
+                count(report.dropped_duplicates, "triangle has", "triangles have")
+            ));
+        }
+        // Sorted by the kept triangle (stable: import order among the duplicates of one).
+        self.scene.duplicates.sort_by_key(|d| d.triangle);
         if self.scene.triangles.is_empty() {
             let what = match self.paths.as_slice() {
                 [one] => one.display().to_string(),
                 _ => "the inputs".to_string(),
             };
-            return Err(ImportError::NoTriangles { what, detail: String::new() });
+            let detail = if report.dropped_precision > 0 {
+                format!(
+                    ": {} collapsed to zero area in f32 relative to the scene's centre",
+                    count(report.dropped_precision, "triangle", "triangles")
+                )
+            } else {
+                String::new()
+            };
+            return Err(ImportError::NoTriangles { what, detail });
         }
         Ok(self.scene)
     }
@@ -311,4 +406,17 @@ impl SceneBuilder {
             _ => format!("source {name:?}"),
         }
     }
+}
+
+/// Whether a triangle has zero area in f64: its edge cross product is exactly zero.
+fn zero_area(v: &[[f64; 3]; 3]) -> bool {
+    let e1: [f64; 3] = std::array::from_fn(|i| v[1][i] - v[0][i]);
+    let e2: [f64; 3] = std::array::from_fn(|i| v[2][i] - v[0][i]);
+    let c = [e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]];
+    c == [0.0; 3]
+}
+
+/// `"1 triangle"`, `"2 triangles"`.
+pub fn count(n: u64, one: &str, many: &str) -> String {
+    if n == 1 { format!("1 {one}") } else { format!("{n} {many}") }
 }

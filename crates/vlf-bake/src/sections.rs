@@ -2,8 +2,8 @@
 //! parameters' sections, and the input hash that identifies the bake (`formats/vlf.md` §3.2).
 //!
 //! **What the input hash covers** ([`input_hash`]): the format's major version, [`BAKER_REVISION`],
-//! the request, and the raw bytes of TRIANGLES, PROVENANCE, SOURCES, INPUTS, STRINGS, MATERIALS,
-//! CAMERAS and LIGHTS. Changing what it covers, or the baker's output for the same inputs, is a
+//! the request, the scene's centre, and the raw bytes of TRIANGLES, PROVENANCE, SOURCES, INPUTS,
+//! STRINGS, MATERIALS, CAMERAS, LIGHTS and DUPLICATES. Changing what it covers, or the baker's output for the same inputs, is a
 //! baker revision bump (and, for the covered list, a format change in `formats/vlf.md`).
 
 use crate::params::Params;
@@ -16,8 +16,10 @@ use vlf_geom::frame::frame;
 
 /// Bumped whenever the baker's output for the same inputs and request changes (part of the input
 /// hash, `formats/vlf.md` §3.2). Revision 2 (format 1.1) adds the MATERIALS, CAMERAS and LIGHTS
-/// sections, and with them what an OBJ's `.mtl` files hold, to the input hash.
-pub const BAKER_REVISION: u32 = 2;
+/// sections, and with them what an OBJ's `.mtl` files hold, to the input hash. Revision 3 (format
+/// 2.0) bakes tile blocks with leaves placed by the surface-area heuristic and boxed refs, stores
+/// triangles relative to the scene's centre and hashes that centre.
+pub const BAKER_REVISION: u32 = 3;
 
 /// The input hash of `formats/vlf.md` §3.2.
 pub fn input_hash(scene: &Scene, request: &Request) -> [u8; 32] {
@@ -26,6 +28,8 @@ pub fn input_hash(scene: &Scene, request: &Request) -> [u8; 32] {
     h.update(&VERSION_MAJOR.to_le_bytes());
     h.update(&BAKER_REVISION.to_le_bytes());
     h.update(bytemuck::bytes_of(request));
+    // TRIANGLES are relative to the centre: the centre says where they are.
+    h.update(bytemuck::bytes_of(&scene.center));
     for (_, bytes) in input_sections(scene) {
         h.update(&(bytes.len() as u64).to_le_bytes());
         h.update(bytes);
@@ -33,9 +37,10 @@ pub fn input_hash(scene: &Scene, request: &Request) -> [u8; 32] {
     *h.finalize().as_bytes()
 }
 
-/// Raw bytes of TRIANGLES, PROVENANCE, SOURCES, INPUTS, STRINGS, MATERIALS, CAMERAS, LIGHTS, in
-/// that order: what the input hash covers (the last three are empty when the inputs define none).
-fn input_sections(scene: &Scene) -> [(SectionKind, &[u8]); 8] {
+/// Raw bytes of TRIANGLES, PROVENANCE, SOURCES, INPUTS, STRINGS, MATERIALS, CAMERAS, LIGHTS and
+/// DUPLICATES, in that order: what the input hash covers (the last four are empty when the inputs
+/// define none).
+fn input_sections(scene: &Scene) -> [(SectionKind, &[u8]); 9] {
     [
         (SectionKind::Triangles, bytemuck::cast_slice(&scene.triangles)),
         (SectionKind::Provenance, bytemuck::cast_slice(&scene.provenance)),
@@ -45,6 +50,7 @@ fn input_sections(scene: &Scene) -> [(SectionKind, &[u8]); 8] {
         (SectionKind::Materials, bytemuck::cast_slice(&scene.materials)),
         (SectionKind::Cameras, bytemuck::cast_slice(&scene.cameras)),
         (SectionKind::Lights, bytemuck::cast_slice(&scene.lights)),
+        (SectionKind::Duplicates, bytemuck::cast_slice(&scene.duplicates)),
     ]
 }
 
@@ -84,7 +90,7 @@ pub const PARAMETER_KINDS: [SectionKind; 4] =
     [SectionKind::Params, SectionKind::Directions, SectionKind::Rotations, SectionKind::Lookup];
 
 /// The shared sections that depend on the scene alone, in file order: SCENE, then TRIANGLES,
-/// PROVENANCE, SOURCES, INPUTS, STRINGS and the optional MATERIALS, CAMERAS, LIGHTS when the
+/// PROVENANCE, SOURCES, INPUTS, STRINGS and the optional MATERIALS, CAMERAS, LIGHTS, DUPLICATES when the
 /// inputs define any. A new section derived from the inputs goes here, so that
 /// fields, shards, merges and the cache key all carry it.
 pub fn scene_sections<'a>(prep: &Prepared<'a>) -> Vec<SharedSection<'a>> {
@@ -98,7 +104,9 @@ pub fn scene_sections<'a>(prep: &Prepared<'a>) -> Vec<SharedSection<'a>> {
         source_count: scene.sources.len() as u32,
         input_count: scene.inputs.len() as u32,
         dropped_degenerate: scene.report.dropped_degenerate,
-        reserved: [0; 3],
+        dropped_precision: scene.report.dropped_precision,
+        dropped_duplicates: scene.report.dropped_duplicates,
+        reserved: 0,
     };
     // The optional sections (MATERIALS, CAMERAS, LIGHTS) are written only when not empty.
     std::iter::once(SharedSection::new(SectionKind::Scene, bytemuck::bytes_of(&record).to_vec()))

@@ -526,41 +526,34 @@ fn write_merged(
 
     // Per-direction sections, shard by shard in index order.
     let position = |kind: SectionKind| layout.iter().position(|e| e.kind == kind as u32).expect("checked at open");
-    let (mut leaf_base, mut id_base) = (0u64, 0u64);
+    let mut leaves_base = 0u64;
     let mut stats = StatisticsRecord::zeroed_record();
     for s in shards {
         let n2 = s.params.tile_resolution as u64 * s.params.tile_resolution as u64;
-        for kind in [SectionKind::Tiles, SectionKind::TriangleIds, SectionKind::LeafBounds] {
+        for kind in [SectionKind::Tiles, SectionKind::Leaves] {
             let e = *s.entry(kind);
             let w = &mut writers[position(kind)];
             s.stream(&e, &mut buf, &mut |b| w.write_all(b).map_err(write_err))?;
             progress.advance(e.raw_length);
         }
         let beams: Vec<BeamRecord> = bytemuck::pod_collect_to_vec(&s.read_section(SectionKind::Beams)?);
-        let (mut leaf, mut id) = (0u64, 0u64);
+        let mut words = 0u64;
         for (i, b) in beams.iter().enumerate() {
-            if b.leaf_base != leaf || b.id_base != id {
+            if b.leaves_base != words {
                 return Err(s.corrupt(format!(
-                    "BEAMS record {i} does not follow the previous one (leaf_base {}, id_base {}; expected {leaf}, {id})",
-                    b.leaf_base, b.id_base
+                    "BEAMS record {i} does not follow the previous one (leaves_base {}; expected {words})",
+                    b.leaves_base
                 )));
             }
-            leaf = leaf.saturating_add(b.leaf_count).saturating_add(1);
-            id = id.saturating_add(b.id_count);
+            words = words.saturating_add(b.leaves_words);
         }
-        let covers = |count: u64, kind: SectionKind| {
-            count.checked_mul(kind.element_size() as u64) == Some(s.entry(kind).raw_length)
-        };
-        if !covers(leaf, SectionKind::LeafBounds) || !covers(id, SectionKind::TriangleIds) {
-            return Err(s.corrupt("BEAMS do not cover LEAF_BOUNDS and TRIANGLE_IDS exactly".into()));
+        if words.checked_mul(vlf_format::size::LEAF_WORD) != Some(s.entry(SectionKind::Leaves).raw_length) {
+            return Err(s.corrupt("BEAMS do not cover LEAVES exactly".into()));
         }
-        let rebased: Vec<BeamRecord> = beams
-            .iter()
-            .map(|b| BeamRecord { leaf_base: b.leaf_base + leaf_base, id_base: b.id_base + id_base, ..*b })
-            .collect();
+        let rebased: Vec<BeamRecord> =
+            beams.iter().map(|b| BeamRecord { leaves_base: b.leaves_base + leaves_base, ..*b }).collect();
         writers[position(SectionKind::Beams)].write_all(bytemuck::cast_slice(&rebased)).map_err(write_err)?;
-        leaf_base += leaf;
-        id_base += id;
+        leaves_base += words;
         let shard_stats: StatisticsRecord = bytemuck::pod_read_unaligned(&s.read_section(SectionKind::Statistics)?);
         if shard_stats.tile_count != beams.len() as u64 * n2 {
             return Err(s.corrupt(format!(

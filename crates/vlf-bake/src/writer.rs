@@ -1,13 +1,12 @@
 //! Writing a bake: lay out a field (or one shard of it), bake its directions in parallel chunks,
-//! and write them in direction order, each byte once, through spill files.
+//! and write them in direction order, each byte once.
 //!
 //! Directions are independent, so they are baked in parallel (rayon) in chunks, and each chunk is
-//! written in direction order to spill files: the output bytes do not depend on the thread count,
-//! and memory does not grow with the field's size. The spill files are anonymous temporary files
-//! in the output directory; the field itself is written through [`AtomicFile`], so the path holds
+//! written in direction order: the output bytes do not depend on the thread count, and memory does
+//! not grow with the field's size. The field is written through [`AtomicFile`], so the path holds
 //! the old field or the new one, never a partial one.
 
-use crate::atomic::{AtomicFile, parent_dir};
+use crate::atomic::AtomicFile;
 use crate::direction::{DirectionData, Scratch, build_direction};
 use crate::error::BakeError;
 use crate::params::Choice;
@@ -18,13 +17,13 @@ use crate::shard::ShardSpec;
 use crate::statistics::{Statistics, merge_stats};
 use rayon::prelude::*;
 use std::fs::File;
-use std::io::{self, BufWriter, Seek, Write};
+use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 use vlf_format::shard::shared_hash;
 use vlf_format::{
-    BeamRecord, FieldFile, HashingWriter, Header, PER_DIRECTION_KINDS, Request, SHARD_KIND, SHARD_MAGIC, SectionEntry,
-    SectionKind, SectionWriter, ShardRecord, StatisticsRecord, size,
+    BeamRecord, FieldFile, Header, PER_DIRECTION_KINDS, Request, SHARD_KIND, SHARD_MAGIC, SectionEntry, SectionKind,
+    SectionWriter, ShardRecord, StatisticsRecord, size,
 };
 use vlf_geom::Lattice;
 use vlf_geom::frame::frame;
@@ -35,6 +34,8 @@ pub struct BakeSummary {
     pub output: PathBuf,
     pub triangles: u64,
     pub dropped_degenerate: u64,
+    pub dropped_precision: u64,
+    pub dropped_duplicates: u64,
     pub directions: u32,
     pub lattice_n: u32,
     pub tile_resolution: u32,
@@ -50,35 +51,15 @@ pub struct BakeSummary {
     pub statistics: Statistics,
 }
 
-/// A section spilled to an anonymous temporary file while it is produced.
-struct Spill {
-    writer: HashingWriter<BufWriter<File>>,
-}
-
-impl Spill {
-    fn new(dir: &Path) -> io::Result<Spill> {
-        Ok(Spill { writer: HashingWriter::new(BufWriter::with_capacity(1 << 20, tempfile::tempfile_in(dir)?)) })
-    }
-
-    fn finish(self) -> io::Result<(File, u64, [u8; 32])> {
-        let (buf, len, hash) = self.writer.finish()?;
-        let mut file = buf.into_inner().map_err(|e| e.into_error())?;
-        file.rewind()?;
-        Ok((file, len, hash))
-    }
-}
-
 /// The per-direction sections of a file being baked, after its shared sections, in this order:
-/// BEAMS and STATISTICS (reserved, filled last), TILES (reserved, filled direction by direction),
-/// TRIANGLE_IDS (streamed behind it) and LEAF_BOUNDS (spilled to a temporary file, appended at
-/// the end): each byte is written once. Fields and shards share this layout, which `merge`
-/// follows to reproduce a field byte for byte.
+/// BEAMS and STATISTICS (reserved, filled last), TILES (reserved, filled direction by direction)
+/// and LEAVES (streamed behind it): each byte is written once. Fields and shards share this
+/// layout, which `merge` follows to reproduce a field byte for byte.
 struct DirectionSections {
     beams_out: SectionWriter,
     stats_out: SectionWriter,
     tiles: SectionWriter,
-    ids: SectionWriter,
-    bounds: Spill,
+    leaves: SectionWriter,
 }
 
 /// Direction by direction: the BEAMS records (bases counted from the file's first direction) and
@@ -87,39 +68,37 @@ struct DirectionSections {
 struct DirectionTotals {
     beams: Vec<BeamRecord>,
     stats: Option<StatisticsRecord>,
-    leaf_base: u64,
-    id_base: u64,
+    leaves_base: u64,
 }
 
 impl DirectionSections {
-    fn open(f: &mut FieldFile, directions: u64, n2: u64, spill_dir: &Path) -> io::Result<Self> {
+    fn open(f: &mut FieldFile, directions: u64, n2: u64) -> io::Result<Self> {
         Ok(DirectionSections {
             beams_out: f.reserve(SectionKind::Beams, directions * size::BEAM)?,
             stats_out: f.reserve(SectionKind::Statistics, size::STATISTICS)?,
             tiles: f.reserve(SectionKind::Tiles, directions * n2 * size::TILE)?,
-            ids: f.stream(SectionKind::TriangleIds)?,
-            bounds: Spill::new(spill_dir)?,
+            leaves: f.stream(SectionKind::Leaves)?,
         })
     }
 
     fn push(&mut self, d: &DirectionData, totals: &mut DirectionTotals) -> io::Result<()> {
         self.tiles.write_all(bytemuck::cast_slice(&d.tiles))?;
-        self.ids.write_all(bytemuck::cast_slice(&d.ids))?;
-        self.bounds.writer.write_all(bytemuck::cast_slice(&d.bounds))?;
-        let leaf_count = d.bounds.len() as u64 - 1;
-        let id_count = d.ids.len() as u64;
-        totals.beams.push(BeamRecord { leaf_base: totals.leaf_base, leaf_count, id_base: totals.id_base, id_count });
-        totals.leaf_base += leaf_count + 1;
-        totals.id_base += id_count;
+        self.leaves.write_all(bytemuck::cast_slice(&d.words))?;
+        let leaves_words = d.words.len() as u64;
+        totals.beams.push(BeamRecord {
+            leaves_base: totals.leaves_base,
+            leaves_words,
+            leaf_count: d.stats.leaf_count,
+            ref_count: d.stats.id_count,
+        });
+        totals.leaves_base += leaves_words;
         merge_stats(totals.stats.get_or_insert_with(StatisticsRecord::zeroed_record), &d.stats);
         Ok(())
     }
 
     fn finish(mut self, f: &mut FieldFile, totals: &DirectionTotals) -> io::Result<StatisticsRecord> {
         f.finish_section(self.tiles)?;
-        f.finish_section(self.ids)?;
-        let (mut bounds_file, bounds_len, bounds_hash) = self.bounds.finish()?;
-        f.append_from(SectionKind::LeafBounds, &mut bounds_file, bounds_len, bounds_hash)?;
+        f.finish_section(self.leaves)?;
         self.beams_out.write_all(bytemuck::cast_slice(&totals.beams))?;
         f.finish_section(self.beams_out)?;
         let stats = totals.stats.unwrap_or_else(StatisticsRecord::zeroed_record);
@@ -165,6 +144,8 @@ impl Baked {
             output: output.to_path_buf(),
             triangles: prep.scene.triangles.len() as u64,
             dropped_degenerate: prep.scene.report.dropped_degenerate,
+            dropped_precision: prep.scene.report.dropped_precision,
+            dropped_duplicates: prep.scene.report.dropped_duplicates,
             directions: self.direction_count,
             lattice_n: params.lattice_n,
             tile_resolution: params.tiles,
@@ -249,7 +230,7 @@ pub fn write_into(
         + size::STATISTICS;
     let over_budget =
         |at_least: u64, baked: usize| BakeError::OverBudget { ceiling, at_least, baked, directions: l as usize };
-    let mut sections = DirectionSections::open(&mut f, range.len() as u64, n2, &parent_dir(path)).map_err(io_err)?;
+    let mut sections = DirectionSections::open(&mut f, range.len() as u64, n2).map_err(io_err)?;
 
     // Directions are baked in parallel, chunk by chunk; a writer thread appends each finished
     // chunk in direction order while the next one is computed. The channel holds at most two
@@ -266,11 +247,7 @@ pub fn write_into(
         let writer = scope.spawn(move || -> Result<(), BakeError> {
             for chunk in receive {
                 for d in chunk {
-                    let at_least = fixed
-                        + size::leaves_and_ids(
-                            totals_w.leaf_base + d.bounds.len() as u64,
-                            totals_w.id_base + d.ids.len() as u64,
-                        );
+                    let at_least = fixed + (totals_w.leaves_base + d.words.len() as u64) * size::LEAF_WORD;
                     if at_least > ceiling {
                         return Err(over_budget(at_least, totals_w.beams.len() + 1));
                     }

@@ -39,9 +39,15 @@ fn source_name(scene: &Scene, s: usize) -> &str {
     string(scene, scene.sources[s].name_offset, scene.sources[s].name_length)
 }
 
-/// The vertices of the triangles that came from `source`, with their index within the source.
+/// Every triangle's vertices in world coordinates, rounded to f32 (the stored vertex plus the
+/// scene's centre; exact for the small coordinates of the fixtures).
+fn world(scene: &Scene) -> Vec<[[f32; 3]; 3]> {
+    scene.world_vertices().iter().map(|t| t.map(|v| v.map(|c| c as f32))).collect()
+}
+
+/// The world vertices of the triangles that came from `source`, with their index within it.
 fn triangles_of(scene: &Scene, source: u32) -> Vec<(u32, [[f32; 3]; 3])> {
-    let vertices = scene.vertices();
+    let vertices = world(scene);
     scene.provenance.iter().zip(vertices).filter(|(p, _)| p.source == source).map(|(p, v)| (p.index, v)).collect()
 }
 
@@ -98,11 +104,11 @@ fn bunny_obj() {
 
     // The first triangle is the first face, vertex for vertex.
     let text = String::from_utf8(bytes).unwrap();
-    let vertices: Vec<[f32; 3]> = text
+    let vertices: Vec<[f64; 3]> = text
         .lines()
         .filter_map(|l| l.strip_prefix("v "))
         .map(|l| {
-            let c: Vec<f32> = l.split_whitespace().map(|x| x.parse().unwrap()).collect();
+            let c: Vec<f64> = l.split_whitespace().map(|x| x.parse().unwrap()).collect();
             [c[0], c[1], c[2]]
         })
         .collect();
@@ -113,7 +119,11 @@ fn bunny_obj() {
         .split_whitespace()
         .map(|x| x.parse().unwrap())
         .collect();
-    assert_eq!(scene.vertices()[0], [vertices[face[0] - 1], vertices[face[1] - 1], vertices[face[2] - 1]]);
+    // Parsed in f64 and stored in f32 relative to the centre: within f32 rounding of the text.
+    let first = scene.world_vertices()[0];
+    for (k, &f) in face.iter().take(3).enumerate() {
+        assert_close(first[k].map(|c| c as f32), vertices[f - 1], 1e-6);
+    }
 }
 
 /// The JSON and binary chunks of a GLB file, read by hand.
@@ -204,7 +214,7 @@ fn bunny_scene_glb() {
         }
     }
     // The ground quad has no transform: y = -0.2 throughout.
-    assert!(ground.iter().all(|(_, t)| t.iter().all(|v| v[1] == -0.2)));
+    assert!(ground.iter().all(|(_, t)| t.iter().all(|v| (v[1] as f64 + 0.2).abs() < 1e-6)));
 }
 
 #[test]
@@ -220,7 +230,7 @@ fn box_gltf_root_rotation_is_applied() {
     assert_eq!(source_name(&scene, 0), "Mesh");
     // Indices 0 1 2 name (-½,-½,½) (½,-½,½) (-½,½,½); the root matrix (columns (1,0,0), (0,0,-1),
     // (0,1,0)) maps (x, y, z) to (x, z, -y).
-    assert_eq!(scene.vertices()[0], [[-0.5, 0.5, 0.5], [0.5, 0.5, 0.5], [-0.5, 0.5, -0.5]]);
+    assert_eq!(world(&scene)[0], [[-0.5, 0.5, 0.5], [0.5, 0.5, 0.5], [-0.5, 0.5, -0.5]]);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -273,8 +283,17 @@ fn obj_missing_material_library_is_a_warning() {
 fn gltf_primitive_modes() {
     let scene = import("small/modes.gltf");
     // Triangles (2, indexed u16), strip (4, not indexed), fan (4, indexed u8), triangles (2, not
-    // indexed); points, lines and a line strip skipped.
-    assert_eq!(scene.len(), 12);
+    // indexed); points, lines and a line strip skipped. The strip's first two triangles and the
+    // last list's two repeat triangles already seen: merged into them, with their provenance kept.
+    assert_eq!(scene.len(), 8);
+    let merged: Vec<_> = scene.duplicates.iter().map(|d| (d.triangle, d.source, d.index)).collect();
+    assert_eq!(merged, [(0, 1, 0), (0, 3, 0), (1, 1, 1), (3, 3, 1)]);
+    assert_eq!(scene.report.dropped_duplicates, 4);
+    assert!(
+        scene.report.warnings.iter().any(|w| w.contains("4 triangles have the same three vertices")),
+        "{:?}",
+        scene.report.warnings
+    );
     assert_eq!(scene.report.skipped_points, 1);
     assert_eq!(scene.report.skipped_lines, 2);
     assert_eq!(scene.report.dropped_degenerate, 0);
@@ -283,22 +302,21 @@ fn gltf_primitive_modes() {
     assert_eq!(s, [(0, 0, 1, 0), (0, 1, 1, NO_INDEX), (0, 2, 1, NO_INDEX), (0, 6, 1, NO_INDEX)]);
     assert!((0..4).all(|i| source_name(&scene, i) == "modes"));
     let per_source: Vec<usize> = (0..4).map(|s| triangles_of(&scene, s).len()).collect();
-    assert_eq!(per_source, [2, 4, 4, 2]);
+    assert_eq!(per_source, [2, 2, 4, 0]);
 
     // Node 0 translates by (10, 0, 0).
     let p = |x: f32, y: f32, z: f32| [x + 10.0, y, z];
     let strip = triangles_of(&scene, 1);
-    assert_eq!(strip.iter().map(|t| t.0).collect::<Vec<_>>(), [0, 1, 2, 3]);
-    // Strip: (0 1 2), (1 3 2), (2 3 4), (3 5 4).
-    assert_eq!(strip[0].1, [p(0., 0., 0.), p(1., 0., 0.), p(0., 1., 0.)]);
-    assert_eq!(strip[1].1, [p(1., 0., 0.), p(1., 1., 0.), p(0., 1., 0.)]);
-    assert_eq!(strip[3].1, [p(1., 1., 0.), p(1., 2., 0.), p(0., 2., 0.)]);
+    assert_eq!(strip.iter().map(|t| t.0).collect::<Vec<_>>(), [2, 3]);
+    // Strip: (0 1 2), (1 3 2), (2 3 4), (3 5 4); the first two are the indexed list's.
+    let list = triangles_of(&scene, 0);
+    assert_eq!(list[0].1, [p(0., 0., 0.), p(1., 0., 0.), p(0., 1., 0.)]);
+    assert_eq!(list[1].1, [p(1., 0., 0.), p(1., 1., 0.), p(0., 1., 0.)]);
+    assert_eq!(strip[1].1, [p(1., 1., 0.), p(1., 2., 0.), p(0., 2., 0.)]);
     // Fan: (1 2 0), (2 3 0), ...
     let fan = triangles_of(&scene, 2);
     assert_eq!(fan[0].1, [p(1., 0., 1.), p(1., 1., 1.), p(0., 0., 1.)]);
     assert_eq!(fan[3].1, [p(-1., 1., 1.), p(-1., 0., 1.), p(0., 0., 1.)]);
-    // Indexed list: 0 1 2, 1 3 2.
-    assert_eq!(triangles_of(&scene, 0)[1].1, [p(1., 0., 0.), p(1., 1., 0.), p(0., 1., 0.)]);
 }
 
 #[test]
@@ -309,7 +327,7 @@ fn gltf_node_hierarchy_and_external_buffer() {
     let nodes: Vec<u32> = scene.sources.iter().map(|s| s.node).collect();
     assert_eq!(nodes, [1, 4]);
     assert!(scene.report.warnings.iter().any(|w| w.contains("2 scenes")), "{:?}", scene.report.warnings);
-    let v = scene.vertices();
+    let v = world(&scene);
     // Node 0: T(1,2,3) · Rz(90°) · S(2). Node 1 (matrix): scale x by 3, then translate z by 10.
     // Together (x, y, z) -> (1 - 2y, 2 + 6x, 23 + 2z).
     let tol = 1e-5;
@@ -631,7 +649,7 @@ fn hostile_gltf_documents_are_errors() {
             "values": {"bufferView": 0, "byteOffset": 12}}),
     );
     let scene = import_json(dir.path(), "sparse.gltf", &doc).unwrap();
-    assert_eq!(scene.vertices(), [[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]]);
+    assert_eq!(world(&scene), [[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]]);
 }
 
 #[test]
@@ -670,7 +688,9 @@ fn hostile_obj_texts_are_errors() {
     std::fs::write(&path, "mtllib short.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl b\nf 1 2 3\nusemtl zz\nf 1 3 2\n")
         .unwrap();
     let scene = import_paths(&[&path]).unwrap();
-    assert_eq!(scene.len(), 2);
+    // `f 1 3 2` is `f 1 2 3` wound the other way: merged into it, its source kept.
+    assert_eq!((scene.len(), scene.duplicates.len()), (1, 1));
+    assert_eq!(scene.duplicates[0].source, 1);
     let materials: Vec<u32> = scene.sources.iter().map(|s| s.material).collect();
     assert_eq!(materials, [1, NO_INDEX]);
     assert!(scene.report.warnings.iter().any(|w| w.contains("\"zz\"")), "{:?}", scene.report.warnings);

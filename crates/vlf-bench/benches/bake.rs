@@ -30,7 +30,7 @@ fn one_direction(c: &mut Criterion) {
         let m = frame(dirs[dirs.len() / 3]);
         let mut scratch = Scratch::default();
         g.bench_function(format!("{tiles}² tiles"), |b| {
-            b.iter(|| black_box(build_direction(&prep, &params, &m, 7, &mut scratch).unwrap().ids.len()))
+            b.iter(|| black_box(build_direction(&prep, &params, &m, 7, &mut scratch).unwrap().words.len()))
         });
     }
     g.finish();

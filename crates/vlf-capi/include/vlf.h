@@ -345,7 +345,8 @@ VlfStatus vlf_any_hits(const struct VlfField *field,
 VlfStatus vlf_triangle_count(const struct VlfField *field, uint32_t *count);
 
 /**
- * The vertices of triangle `prim`, in `vertices[0..9]`: `v0.x, v0.y, v0.z, v1.x, …, v2.z`.
+ * The vertices of triangle `prim` in world coordinates (rounded to f32), in `vertices[0..9]`:
+ * `v0.x, v0.y, v0.z, v1.x, …, v2.z`.
  *
  * Returns `VLF_OK`, `VLF_ERR_NULL_ARGUMENT`, or `VLF_ERR_INVALID_ARGUMENT` if `prim` is not
  * below the triangle count.

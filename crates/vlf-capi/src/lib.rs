@@ -315,7 +315,8 @@ pub unsafe extern "C" fn vlf_triangle_count(field: *const VlfField, count: *mut 
     })
 }
 
-/// The vertices of triangle `prim`, in `vertices[0..9]`: `v0.x, v0.y, v0.z, v1.x, …, v2.z`.
+/// The vertices of triangle `prim` in world coordinates (rounded to f32), in `vertices[0..9]`:
+/// `v0.x, v0.y, v0.z, v1.x, …, v2.z`.
 ///
 /// Returns `VLF_OK`, `VLF_ERR_NULL_ARGUMENT`, or `VLF_ERR_INVALID_ARGUMENT` if `prim` is not
 /// below the triangle count.
@@ -329,7 +330,8 @@ pub unsafe extern "C" fn vlf_triangle(field: *const VlfField, prim: u32, vertice
         let (field, vertices) = unsafe { (field_arg(field)?, slice_out(vertices, 9, "vertices")?) };
         triangle_range(field, prim)?;
         let t = field.triangle(prim).ok_or_else(|| Failure::invalid(format!("no triangle {prim}")))?;
-        write_all(vertices, t.as_flattened());
+        let world: Vec<f32> = t.as_flattened().iter().map(|&c| c as f32).collect();
+        write_all(vertices, &world);
         Ok(())
     })
 }

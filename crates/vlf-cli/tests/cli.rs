@@ -20,8 +20,8 @@ use vlf_runtime::{Field, Hit, Ray, hex};
 const BUNNY_TRIANGLES: u64 = 3674;
 const BOX_TRIANGLES: u64 = 12;
 
-/// The sections every version 1 field holds (`formats/vlf.md` §5); the bunny has no others.
-const SECTION_NAMES: [&str; 15] = [
+/// The sections every version 2 field holds (`formats/vlf.md` §5); the bunny has no others.
+const SECTION_NAMES: [&str; 14] = [
     "SCENE",
     "PARAMS",
     "DIRECTIONS",
@@ -29,8 +29,7 @@ const SECTION_NAMES: [&str; 15] = [
     "LOOKUP",
     "BEAMS",
     "TILES",
-    "LEAF_BOUNDS",
-    "TRIANGLE_IDS",
+    "LEAVES",
     "TRIANGLES",
     "PROVENANCE",
     "SOURCES",
@@ -255,7 +254,7 @@ fn dump_json_has_the_documented_keys_and_agrees_with_the_library() {
     assert!(j.get("verify").is_none(), "no verify object without --verify");
 
     let field = Field::open(&field_path).unwrap();
-    assert_eq!(j["format_version"], "1.1");
+    assert_eq!(j["format_version"], "2.0");
     assert_eq!((&j["materials"], &j["cameras"], &j["lights"]), (&json!(0), &json!(0), &json!(0)), "{j}");
     assert_eq!(j["content_hash"], hex(&field.content_hash()));
     assert_eq!(j["input_hash"], hex(&field.input_hash()));
@@ -267,7 +266,7 @@ fn dump_json_has_the_documented_keys_and_agrees_with_the_library() {
     assert_eq!((field.direction_count(), field.tile_resolution()), (33, 16));
 
     let sections = j["sections"].as_array().expect("sections is an array");
-    assert_eq!(sections.len(), 15, "{j}");
+    assert_eq!(sections.len(), 14, "{j}");
     let file_bytes = field.len_bytes();
     for e in sections {
         for key in ["name", "offset", "stored_length", "raw_hash"] {
@@ -296,7 +295,7 @@ fn dump_text_describes_the_field_and_names_every_section() {
     let r = vlf(&["dump", s(&field_path)]).ok();
     assert_eq!(r.stderr, "");
     let field = Field::open(&field_path).unwrap();
-    assert!(r.stdout.starts_with("VLF field, format 1.1"), "{}", r.stdout);
+    assert!(r.stdout.starts_with("VLF field, format 2.0"), "{}", r.stdout);
     assert!(r.stdout.contains("0 materials, 0 cameras, 0 lights"), "{}", r.stdout);
     assert!(r.stdout.contains(&hex(&field.content_hash())), "{}", r.stdout);
     assert!(r.stdout.contains(&format!("{BUNNY_TRIANGLES}")), "{}", r.stdout);
@@ -323,10 +322,10 @@ fn dump_verify_reports_ok_on_a_sound_field() {
 // 3. corruption
 
 #[test]
-fn a_flipped_byte_in_triangle_ids_fails_verify_naming_the_section() {
+fn a_flipped_byte_in_the_leaves_fails_verify_naming_the_section() {
     let dir = tempdir();
     let good = bake_bunny(dir.path(), "good.vlf");
-    let (offset, len) = section_span(&good, "TRIANGLE_IDS");
+    let (offset, len) = section_span(&good, "LEAVES");
     assert!(len > 0);
     let mut bytes = std::fs::read(&good).unwrap();
     bytes[(offset + len / 2) as usize] ^= 0x01;
@@ -339,7 +338,7 @@ fn a_flipped_byte_in_triangle_ids_fails_verify_naming_the_section() {
     for args in [vec!["dump", s(&bad), "--verify"], vec!["dump", s(&bad), "--verify", "--json"]] {
         let r = vlf(&args);
         let line = r.one_error_line();
-        assert!(line.contains("TRIANGLE_IDS"), "the error does not name the section: {line}");
+        assert!(line.contains("LEAVES"), "the error does not name the section: {line}");
         assert!(line.contains("hash mismatch") || line.contains("corrupt"), "{line}");
         assert!(!r.stdout.contains("verify: OK"), "{}", r.stdout);
     }
@@ -1095,7 +1094,7 @@ fn pack_and_unpack_restore_the_field_byte_for_byte_and_summarise() {
     assert_eq!(j["raw_bytes"].as_u64().unwrap(), std::fs::metadata(&field).unwrap().len());
     assert!(j["ratio"].as_f64().unwrap() > 1.5, "{j}");
     assert_eq!(j["raw_content_hash"], hex(&Field::open(&field).unwrap().content_hash()));
-    assert_eq!(j["sections"].as_array().unwrap().len(), 15);
+    assert_eq!(j["sections"].as_array().unwrap().len(), 14);
 
     let back = dir.path().join("back.vlf");
     let u = vlf(&["unpack", s(&packed), "-o", s(&back), "--json"]).ok().json();

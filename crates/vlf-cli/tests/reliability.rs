@@ -148,7 +148,7 @@ fn dump_verify_names_the_damage_in_a_sample_of_damaged_fields() {
     let table_end = 128 + 72 * sections.len() as u64;
     let mut cases: Vec<(u64, String)> = vec![
         (1, "bad magic".into()),
-        (8, "format version 0.".into()),
+        (8, "format version 3.".into()),
         (16, "the file is truncated".into()),
         (40, "`flags` must be zero".into()),
         (60, "content hash mismatch".into()),

@@ -22,7 +22,10 @@ pub enum FormatError {
         hint: &'static str,
     },
     /// The file's major version is not the one this reader reads.
-    #[error("format version {major}.{minor} is not supported: this reader reads major version {supported}")]
+    #[error(
+        "format version {major}.{minor} is not supported: this reader reads format {supported}.x{}",
+        version_hint(*major, *supported)
+    )]
     UnsupportedVersion {
         /// The file's major version.
         major: u16,
@@ -196,4 +199,13 @@ pub fn hex(bytes: &[u8]) -> String {
         s.push_str(&format!("{b:02x}"));
     }
     s
+}
+
+/// What to do about a field of another major version.
+fn version_hint(major: u16, supported: u16) -> &'static str {
+    if major < supported {
+        " (the field was baked by an older vlf-bake: rebake it from its meshes with this one)"
+    } else {
+        " (the field was baked by a newer vlf-bake: read it with that version or newer)"
+    }
 }

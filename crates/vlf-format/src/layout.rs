@@ -11,11 +11,12 @@ pub const MAGIC: [u8; 8] = [0x89, b'V', b'L', b'F', b'\r', b'\n', 0x1a, b'\n'];
 /// `\x89VLS\r\n\x1a\n`: the magic of shard files (`formats/vlf-shard.md`), a field's magic with
 /// `F` replaced by `S`, keeping the transfer checks; a field reader refuses it.
 pub const SHARD_MAGIC: [u8; 8] = [0x89, b'V', b'L', b'S', b'\r', b'\n', 0x1a, b'\n'];
-/// The major version this crate reads and writes. A reader refuses any other major.
-pub const VERSION_MAJOR: u16 = 1;
-/// The minor version this crate writes. Readers of the same major accept any minor. Minor 1 added
-/// the optional MATERIALS, CAMERAS and LIGHTS sections.
-pub const VERSION_MINOR: u16 = 1;
+/// The major version this crate reads and writes. A reader refuses any other major. Major 2
+/// replaced the tiles' complete BSPs of fixed-size leaves with tile blocks (§5.6) and stores
+/// triangles relative to the scene's centre (§5.7).
+pub const VERSION_MAJOR: u16 = 2;
+/// The minor version this crate writes. Readers of the same major accept any minor.
+pub const VERSION_MINOR: u16 = 0;
 /// Size of the header in bytes.
 pub const HEADER_SIZE: usize = 128;
 /// Size of one section-table entry in bytes.
@@ -31,9 +32,10 @@ pub const CONTENT_HASH_RANGE: std::ops::Range<usize> = 48..80;
 /// most this many times its `stored_length` (`formats/vlf.md` §8). Readers refuse a table entry
 /// that claims more, before allocating anything for it.
 pub const MAX_ZSTD_EXPANSION: u64 = 32768;
-/// The largest BSP depth a file may record.
-pub const MAX_DEPTH: u32 = 24;
-/// Quantisation levels of a tile's z range: `z(q) = -R + q * (2R / Z_LEVELS)`.
+/// The largest leaf-split depth the leaf policy may ask for (§6.3): a tile has at most
+/// `2^MAX_DEPTH` leaves, which is [`crate::block::MAX_LEAVES`].
+pub const MAX_DEPTH: u32 = 12;
+/// Quantisation levels of the beam coordinate of leaf boundaries: `z(q) = -R + q * (2R / Z_LEVELS)`.
 pub const Z_LEVELS: u32 = 65535;
 /// LOOKUP value of a cell that is not a lattice point.
 pub const LOOKUP_NONE: u32 = u32::MAX;
@@ -55,13 +57,15 @@ pub type RotationRecord = [f64; 9];
 /// a cell that is not a lattice point.
 pub type LookupEntry = u32;
 
-/// LEAF_BOUNDS element (§5.6): where a leaf's ids start in TRIANGLE_IDS, relative to its
-/// direction's `id_base`; non-decreasing within a direction, from 0 to the direction's `id_count`.
-pub type LeafBound = u32;
+/// TILES element (§5.6): where the tile's block starts in LEAVES, in 8-byte words from its
+/// direction's `leaves_base`; [`EMPTY_TILE`] for a tile that holds no triangle.
+pub type TileEntry = u32;
 
-/// TRIANGLE_IDS element (§5.6): the id of a triangle (its index in TRIANGLES); strictly increasing
-/// within a leaf.
-pub type TriangleId = u32;
+/// The TILES value of a tile that holds no triangle.
+pub const EMPTY_TILE: TileEntry = u32::MAX;
+
+/// LEAVES element (§5.6): an 8-byte word of the tile blocks ([`crate::block`]).
+pub type LeafWord = u64;
 
 /// The file header (§3), 128 bytes at offset 0.
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq, Eq)]
@@ -132,9 +136,9 @@ pub struct Request {
     pub requested_directions: u32,
     /// Tiles per side asked for; 0 = automatic. Read it with [`Request::requested_tiles`].
     pub requested_tiles: u32,
-    /// Depth policy: target triangles per BSP leaf, ≥ 1 (§6.3).
+    /// Leaf policy: a leaf of at most this many refs is not split, ≥ 1 (§6.3).
     pub leaf_size: u32,
-    /// Depth policy: largest BSP depth, at most [`MAX_DEPTH`] (§6.3).
+    /// Leaf policy: largest split depth, at most [`MAX_DEPTH`] (§6.3).
     pub max_depth: u32,
     /// Bytes: the size budget of automatic parameters, and a ceiling for explicit ones.
     pub max_bytes: u64,
@@ -165,18 +169,19 @@ impl Request {
     }
 }
 
-/// SCENE (§5.1), 128 bytes: the bounding sphere that normalises the scene.
+/// SCENE (§5.1), 128 bytes: the bounding sphere that normalises the scene, and where the scene is:
+/// triangles are stored relative to `center` (§5.7).
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
 #[repr(C)]
 pub struct SceneRecord {
-    /// Centre `c` of the bounding sphere, world units.
+    /// Centre `c` of the bounding sphere, world units: the origin of the stored triangles.
     pub center: [f64; 3],
     /// Radius `R > 0` of the bounding sphere, world units; every vertex lies inside it. Tiles
     /// cover `[-R, R]²` around `c`, and the beam coordinate `z` runs over `[-R, R]`.
     pub radius: f64,
-    /// Minimum corner of the vertices' axis-aligned bounding box, world units.
+    /// Minimum corner of the stored vertices' axis-aligned bounding box, relative to `center`.
     pub aabb_min: [f64; 3],
-    /// Maximum corner of that box, world units.
+    /// Maximum corner of that box, relative to `center`.
     pub aabb_max: [f64; 3],
     /// `T`, the triangles stored (elements of TRIANGLES), at most 2³² − 1.
     pub triangle_count: u64,
@@ -184,10 +189,17 @@ pub struct SceneRecord {
     pub source_count: u32,
     /// Elements of INPUTS.
     pub input_count: u32,
-    /// Zero-area triangles the importer dropped (not stored).
+    /// Zero-area triangles the importer dropped (not stored): zero area in the input's own
+    /// coordinates (f64).
     pub dropped_degenerate: u64,
+    /// Triangles of non-zero area that have zero area once stored as f32 relative to `center`
+    /// (dropped: no ray can hit them); a loss of precision, not an input defect.
+    pub dropped_precision: u64,
+    /// Triangles with the same three stored vertices as an earlier one (in any order), merged
+    /// into it: a ray cannot tell them apart.
+    pub dropped_duplicates: u64,
     /// 0.
-    pub reserved: [u64; 3],
+    pub reserved: u64,
 }
 
 /// PARAMS (§5.2), 64 bytes: the parameters chosen, and the request they were chosen for.
@@ -200,9 +212,9 @@ pub struct ParamsRecord {
     pub direction_count: u32,
     /// `n ≥ 1`, tiles per side of every direction's grid; tile width `w = 2R / n`.
     pub tile_resolution: u32,
-    /// Depth policy: target triangles per leaf (§6.3).
+    /// Leaf policy: a leaf of at most this many refs is not split (§6.3).
     pub leaf_size: u32,
-    /// Depth policy: largest BSP depth, at most [`MAX_DEPTH`].
+    /// Leaf policy: largest split depth, at most [`MAX_DEPTH`] (§6.3).
     pub max_depth: u32,
     /// As in the request: 0 = automatic. Read it with [`ParamsRecord::requested_directions`].
     pub requested_directions: u32,
@@ -249,73 +261,40 @@ impl ParamsRecord {
     }
 }
 
-/// BEAMS (§5.5), 32 bytes, one per direction: where the direction's leaves and ids live.
-/// Directions follow each other without gaps, both bases starting at 0.
+/// BEAMS (§5.5), 32 bytes, one per direction: where the direction's tile blocks live in LEAVES.
+/// Directions follow each other without gaps, the first at word 0.
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq, Eq, Default)]
 #[repr(C)]
 pub struct BeamRecord {
-    /// Index in LEAF_BOUNDS of the direction's first bound; the direction owns `leaf_count + 1`
-    /// bounds from here.
-    pub leaf_base: u64,
-    /// Leaves of all the direction's tiles.
+    /// Index in LEAVES (8-byte words) of the direction's first block.
+    pub leaves_base: u64,
+    /// Words of LEAVES the direction's blocks take, at most 2³² − 1.
+    pub leaves_words: u64,
+    /// Leaves of all the direction's tiles (Σ of their blocks' `K`).
     pub leaf_count: u64,
-    /// Index in TRIANGLE_IDS of the direction's first id.
-    pub id_base: u64,
-    /// Ids of the direction, at most 2³² − 1.
-    pub id_count: u64,
+    /// Refs of all the direction's leaves (Σ of their blocks' `m`).
+    pub ref_count: u64,
 }
 
-/// TILES (§5.6), 12 bytes, one per tile: the tile's linearised 1D BSP. Tile `(s, t)` of direction
-/// `j` is element `j·n² + t·n + s`.
-#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq, Eq)]
-#[repr(C)]
-pub struct TileRecord {
-    /// Index of the tile's first leaf within its direction: 0 for the first tile, then the
-    /// previous tile's plus its `2^depth` leaves.
-    pub first_leaf: u32,
-    /// Quantised lower end of the tile's z range: `z(q) = −R + q · 2R / Z_LEVELS`
-    /// ([`Z_LEVELS`]); 65535 in an empty tile.
-    pub z_lo: u16,
-    /// Quantised upper end; above `z_lo` in a non-empty tile, 0 in an empty one.
-    pub z_hi: u16,
-    /// BSP depth `D ≤ max_depth`: the tile has `2^D` leaves; 0 in an empty tile.
-    pub depth: u8,
-    /// 0.
-    pub reserved: [u8; 3],
-}
-
-impl TileRecord {
-    /// The record of a tile that holds no triangle.
-    pub const fn empty(first_leaf: u32) -> Self {
-        TileRecord { first_leaf, z_lo: u16::MAX, z_hi: 0, depth: 0, reserved: [0; 3] }
-    }
-
-    /// Whether the tile holds no triangle (its z range is empty).
-    #[inline]
-    pub fn is_empty(&self) -> bool {
-        self.z_lo >= self.z_hi
-    }
-}
-
-/// TRIANGLES (§5.7), 48 bytes: one triangle, in import order (its index is its id).
+/// TRIANGLES (§5.7), 36 bytes: one triangle, in import order (its index is its id), its vertices
+/// relative to the scene's centre.
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
 #[repr(C)]
 pub struct TriangleRecord {
-    /// Its three world-space vertices (node transforms applied), all finite, each `(x, y, z, 0)`:
-    /// padded to four floats.
-    pub v: [[f32; 4]; 3],
+    /// Its three vertices minus SCENE `center`, rounded to f32 from the importer's f64 world
+    /// coordinates (node transforms applied); all finite.
+    pub v: [[f32; 3]; 3],
 }
 
 impl TriangleRecord {
     pub fn new(v0: [f32; 3], v1: [f32; 3], v2: [f32; 3]) -> Self {
-        let p = |v: [f32; 3]| [v[0], v[1], v[2], 0.0];
-        TriangleRecord { v: [p(v0), p(v1), p(v2)] }
+        TriangleRecord { v: [v0, v1, v2] }
     }
 
-    /// Vertex `i` (0, 1 or 2) without the padding.
+    /// Vertex `i` (0, 1 or 2), relative to the centre.
     #[inline(always)]
     pub fn vertex(&self, i: usize) -> [f32; 3] {
-        [self.v[i][0], self.v[i][1], self.v[i][2]]
+        self.v[i]
     }
 }
 
@@ -505,6 +484,20 @@ pub mod light_kind {
     pub const DIRECTIONAL: u32 = 3;
 }
 
+/// DUPLICATES (§5.13, optional), 12 bytes: a triangle of the input with the same three stored
+/// vertices as a kept triangle, merged into it (a ray cannot tell them apart), with where it came
+/// from. Records are sorted by `triangle`, then in import order.
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq, Eq)]
+#[repr(C)]
+pub struct DuplicateRecord {
+    /// The id of the kept triangle it repeats.
+    pub triangle: u32,
+    /// Its source, an index into SOURCES.
+    pub source: u32,
+    /// Its index within its source, as in PROVENANCE.
+    pub index: u32,
+}
+
 /// STATISTICS (§5.9), 384 bytes: facts the baker computed, so that `dump` prints them without
 /// reading the tiles; a verifying reader recomputes and compares them. Counts over all directions.
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq, Eq)]
@@ -518,13 +511,13 @@ pub struct StatisticsRecord {
     pub tile_triangle_sum: u64,
     /// The most distinct triangles in one tile.
     pub max_tile_triangles: u32,
-    /// The deepest BSP of any tile.
+    /// The largest `⌈log2 K⌉` of any tile's leaf count `K`.
     pub max_depth_used: u32,
     /// Σ `leaf_count_j` of BEAMS.
     pub leaf_count: u64,
-    /// Σ `id_count_j` of BEAMS: ids including duplicates across leaves.
+    /// Σ `ref_count_j` of BEAMS: refs, a triangle counted once per leaf it is in.
     pub id_count: u64,
-    /// `depth_histogram[D]`: non-empty tiles of depth `D`.
+    /// `depth_histogram[D]`: non-empty tiles with `⌈log2 K⌉ = D` (`K` leaves).
     pub depth_histogram: [u64; 32],
     /// 0.
     pub reserved: [u64; 10],
@@ -563,8 +556,9 @@ const _: () = {
     assert!(size_of::<SceneRecord>() == 128);
     assert!(size_of::<ParamsRecord>() == 64);
     assert!(size_of::<BeamRecord>() == 32);
-    assert!(size_of::<TileRecord>() == 12);
-    assert!(size_of::<TriangleRecord>() == 48);
+    assert!(size_of::<TileEntry>() == 4);
+    assert!(size_of::<LeafWord>() == 8);
+    assert!(size_of::<TriangleRecord>() == 36);
     assert!(size_of::<ProvenanceRecord>() == 8);
     assert!(size_of::<SourceRecord>() == 32);
     assert!(size_of::<InputRecord>() == 48);
@@ -572,6 +566,7 @@ const _: () = {
     assert!(size_of::<MaterialRecord>() == 96);
     assert!(size_of::<CameraRecord>() == 88);
     assert!(size_of::<LightRecord>() == 80);
+    assert!(size_of::<DuplicateRecord>() == 12);
     assert!(size_of::<ShardRecord>() == 64);
     assert!(std::mem::offset_of!(MaterialRecord, specular) == 32);
     assert!(std::mem::offset_of!(MaterialRecord, emission) == 80);

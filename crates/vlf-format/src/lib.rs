@@ -22,6 +22,7 @@
 compile_error!("vlf-format supports little-endian targets only: the file format is little-endian and is cast in place");
 
 pub mod aligned;
+pub mod block;
 pub mod error;
 pub mod layout;
 pub mod pack;

@@ -35,13 +35,12 @@ pub struct FieldReader<'a> {
     pub lookup: &'a [u32],
     /// BEAMS (§5.5): per direction, where its leaf bounds and triangle ids start.
     pub beams: &'a [BeamRecord],
-    /// TILES (§5.6): the `l · n²` tiles, direction by direction, row by row.
-    pub tiles: &'a [TileRecord],
-    /// LEAF_BOUNDS (§5.6): per direction, `leaf_count + 1` bounds into its triangle ids.
-    pub leaf_bounds: &'a [u32],
-    /// TRIANGLE_IDS (§5.6): the triangle ids of every leaf, leaf after leaf.
-    pub triangle_ids: &'a [u32],
-    /// TRIANGLES (§5.7): the world-space vertices of every triangle, in id order.
+    /// TILES (§5.6): the `l · n²` tiles, direction by direction, row by row: where each tile's
+    /// block starts in its direction's LEAVES, or [`EMPTY_TILE`].
+    pub tiles: &'a [TileEntry],
+    /// LEAVES (§5.6): the tile blocks of every direction ([`crate::block`]), in 8-byte words.
+    pub leaves: &'a [LeafWord],
+    /// TRIANGLES (§5.7): the vertices of every triangle relative to SCENE's centre, in id order.
     pub triangles: &'a [TriangleRecord],
     /// PROVENANCE (§5.8): per triangle, its source and its index within it.
     pub provenance: &'a [ProvenanceRecord],
@@ -57,6 +56,8 @@ pub struct FieldReader<'a> {
     pub cameras: &'a [CameraRecord],
     /// LIGHTS (§5.12); empty if the file has none.
     pub lights: &'a [LightRecord],
+    /// DUPLICATES (§5.13); empty if the file has none.
+    pub duplicates: &'a [DuplicateRecord],
 }
 
 /// The header and table checks of §7, without casting any section. Used by [`FieldReader::new`]
@@ -260,8 +261,7 @@ impl<'a> FieldReader<'a> {
             lookup: typed(raw(SectionKind::Lookup)?, SectionKind::Lookup)?,
             beams: typed(raw(SectionKind::Beams)?, SectionKind::Beams)?,
             tiles: typed(raw(SectionKind::Tiles)?, SectionKind::Tiles)?,
-            leaf_bounds: typed(raw(SectionKind::LeafBounds)?, SectionKind::LeafBounds)?,
-            triangle_ids: typed(raw(SectionKind::TriangleIds)?, SectionKind::TriangleIds)?,
+            leaves: typed(raw(SectionKind::Leaves)?, SectionKind::Leaves)?,
             triangles: typed(raw(SectionKind::Triangles)?, SectionKind::Triangles)?,
             provenance: typed(raw(SectionKind::Provenance)?, SectionKind::Provenance)?,
             sources: typed(raw(SectionKind::Sources)?, SectionKind::Sources)?,
@@ -270,6 +270,7 @@ impl<'a> FieldReader<'a> {
             materials: typed(raw(SectionKind::Materials)?, SectionKind::Materials)?,
             cameras: typed(raw(SectionKind::Cameras)?, SectionKind::Cameras)?,
             lights: typed(raw(SectionKind::Lights)?, SectionKind::Lights)?,
+            duplicates: typed(raw(SectionKind::Duplicates)?, SectionKind::Duplicates)?,
         };
         expect_count(SectionKind::Directions, reader.directions.len() as u64, l)?;
         expect_count(SectionKind::Rotations, reader.rotations.len() as u64, l)?;

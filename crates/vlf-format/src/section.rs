@@ -1,5 +1,5 @@
 //! Section kinds (`formats/vlf.md` §5, `formats/vlf-shard.md` §3): their numbers, names and
-//! element sizes, which a version 1 file must hold, which hold per-direction data; and the codecs
+//! element sizes, which a version 2 file must hold, which hold per-direction data; and the codecs
 //! of the section table (§4, §8).
 
 use crate::layout::*;
@@ -15,8 +15,8 @@ pub enum SectionKind {
     Lookup = 5,
     Beams = 6,
     Tiles = 7,
-    LeafBounds = 8,
-    TriangleIds = 9,
+    Leaves = 8,
+    // Kind 9 held TRIANGLE_IDS in format 1; version 2 has no kind 9.
     Triangles = 10,
     Provenance = 11,
     Sources = 12,
@@ -26,6 +26,7 @@ pub enum SectionKind {
     Materials = 16,
     Cameras = 17,
     Lights = 18,
+    Duplicates = 19,
 }
 
 impl SectionKind {
@@ -38,8 +39,7 @@ impl SectionKind {
         SectionKind::Lookup,
         SectionKind::Beams,
         SectionKind::Tiles,
-        SectionKind::LeafBounds,
-        SectionKind::TriangleIds,
+        SectionKind::Leaves,
         SectionKind::Triangles,
         SectionKind::Provenance,
         SectionKind::Sources,
@@ -49,10 +49,11 @@ impl SectionKind {
         SectionKind::Materials,
         SectionKind::Cameras,
         SectionKind::Lights,
+        SectionKind::Duplicates,
     ];
 
-    /// The kinds every version 1 file holds (the kinds of version 1.0).
-    pub const REQUIRED: [SectionKind; 15] = [
+    /// The kinds every version 2 file holds.
+    pub const REQUIRED: [SectionKind; 14] = [
         SectionKind::Scene,
         SectionKind::Params,
         SectionKind::Directions,
@@ -60,8 +61,7 @@ impl SectionKind {
         SectionKind::Lookup,
         SectionKind::Beams,
         SectionKind::Tiles,
-        SectionKind::LeafBounds,
-        SectionKind::TriangleIds,
+        SectionKind::Leaves,
         SectionKind::Triangles,
         SectionKind::Provenance,
         SectionKind::Sources,
@@ -70,11 +70,12 @@ impl SectionKind {
         SectionKind::Statistics,
     ];
 
-    /// The kinds added in version 1.1: a file may omit them, which means the same as an empty
-    /// section (a 1.0 file has none).
-    pub const OPTIONAL: [SectionKind; 3] = [SectionKind::Materials, SectionKind::Cameras, SectionKind::Lights];
+    /// The optional kinds (added in version 1.1): a file may omit them, which means the same as an
+    /// empty section.
+    pub const OPTIONAL: [SectionKind; 4] =
+        [SectionKind::Materials, SectionKind::Cameras, SectionKind::Lights, SectionKind::Duplicates];
 
-    /// Whether a version 1 file must hold this kind.
+    /// Whether a version 2 file must hold this kind.
     pub const fn is_required(self) -> bool {
         (self as u32) <= SectionKind::Statistics as u32
     }
@@ -92,9 +93,8 @@ impl SectionKind {
             SectionKind::Rotations => size_of::<RotationRecord>() as u32,
             SectionKind::Lookup => size_of::<LookupEntry>() as u32,
             SectionKind::Beams => size_of::<BeamRecord>() as u32,
-            SectionKind::Tiles => size_of::<TileRecord>() as u32,
-            SectionKind::LeafBounds => size_of::<LeafBound>() as u32,
-            SectionKind::TriangleIds => size_of::<TriangleId>() as u32,
+            SectionKind::Tiles => size_of::<TileEntry>() as u32,
+            SectionKind::Leaves => size_of::<LeafWord>() as u32,
             SectionKind::Triangles => size_of::<TriangleRecord>() as u32,
             SectionKind::Provenance => size_of::<ProvenanceRecord>() as u32,
             SectionKind::Sources => size_of::<SourceRecord>() as u32,
@@ -104,6 +104,7 @@ impl SectionKind {
             SectionKind::Materials => size_of::<MaterialRecord>() as u32,
             SectionKind::Cameras => size_of::<CameraRecord>() as u32,
             SectionKind::Lights => size_of::<LightRecord>() as u32,
+            SectionKind::Duplicates => size_of::<DuplicateRecord>() as u32,
         }
     }
 
@@ -117,8 +118,7 @@ impl SectionKind {
             SectionKind::Lookup => "LOOKUP",
             SectionKind::Beams => "BEAMS",
             SectionKind::Tiles => "TILES",
-            SectionKind::LeafBounds => "LEAF_BOUNDS",
-            SectionKind::TriangleIds => "TRIANGLE_IDS",
+            SectionKind::Leaves => "LEAVES",
             SectionKind::Triangles => "TRIANGLES",
             SectionKind::Provenance => "PROVENANCE",
             SectionKind::Sources => "SOURCES",
@@ -128,6 +128,7 @@ impl SectionKind {
             SectionKind::Materials => "MATERIALS",
             SectionKind::Cameras => "CAMERAS",
             SectionKind::Lights => "LIGHTS",
+            SectionKind::Duplicates => "DUPLICATES",
         }
     }
 }
@@ -153,13 +154,8 @@ pub const SHARD_KIND: u32 = 0x1_0000;
 /// The sections that hold per-direction data. In a shard they hold its directions only (BEAMS
 /// bases relative to its first direction, STATISTICS over its directions); every other section of
 /// a shard is *shared*: byte for byte the section of the merged field.
-pub const PER_DIRECTION_KINDS: [SectionKind; 5] = [
-    SectionKind::Beams,
-    SectionKind::Statistics,
-    SectionKind::Tiles,
-    SectionKind::TriangleIds,
-    SectionKind::LeafBounds,
-];
+pub const PER_DIRECTION_KINDS: [SectionKind; 4] =
+    [SectionKind::Beams, SectionKind::Statistics, SectionKind::Tiles, SectionKind::Leaves];
 
 /// Whether sections of `kind` hold per-direction data ([`PER_DIRECTION_KINDS`]).
 pub fn is_per_direction(kind: u32) -> bool {
@@ -171,7 +167,8 @@ const _: () = {
     assert!(SectionKind::Directions.element_size() == 16);
     assert!(SectionKind::Rotations.element_size() == 72);
     assert!(SectionKind::Lookup.element_size() == 4);
-    assert!(SectionKind::LeafBounds.element_size() == 4);
-    assert!(SectionKind::TriangleIds.element_size() == 4);
+    assert!(SectionKind::Tiles.element_size() == 4);
+    assert!(SectionKind::Leaves.element_size() == 8);
+    assert!(SectionKind::Triangles.element_size() == 36);
     assert!(SectionKind::Strings.element_size() == 1);
 };

@@ -4,6 +4,7 @@
 //! Geometric facts (that DIRECTIONS, LOOKUP and ROTATIONS are the lattice of §5.3–5.4) are not
 //! checked here: this crate knows bytes, not geometry. `vlf-bake dump --verify` adds those checks.
 
+use crate::block::Block;
 use crate::error::{FormatError, hex};
 use crate::layout::*;
 use crate::reader::FieldReader;
@@ -15,6 +16,7 @@ pub struct VerifyReport {
     pub bytes_hashed: u64,
     pub sections: usize,
     pub tiles: u64,
+    /// Refs checked.
     pub ids: u64,
 }
 
@@ -56,12 +58,13 @@ pub fn verify(field: &FieldReader<'_>, progress: &mut dyn FnMut(u64, u64)) -> Re
     }
 
     check_reserved(field)?;
-    check_beams_tiles_leaves(field, &mut report)?;
+    let recount = check_beams_tiles_leaves(field, &mut report)?;
     check_triangles_and_provenance(field)?;
     check_materials(field)?;
     check_cameras(field)?;
     check_lights(field)?;
-    check_statistics(field)?;
+    check_duplicates(field)?;
+    check_statistics(field, &recount)?;
     progress(total, total);
     Ok(report)
 }
@@ -76,7 +79,7 @@ fn check_zero(bytes: &[u8], from: u64, to: u64) -> Result<(), FormatError> {
 }
 
 fn check_reserved(f: &FieldReader<'_>) -> Result<(), FormatError> {
-    if f.scene.reserved != [0; 3] {
+    if f.scene.reserved != 0 {
         return Err(invalid("SCENE", "reserved fields are not zero".into()));
     }
     if f.params.reserved0 != 0 || f.params.reserved1 != 0 {
@@ -107,95 +110,85 @@ fn check_reserved(f: &FieldReader<'_>) -> Result<(), FormatError> {
     Ok(())
 }
 
-fn check_beams_tiles_leaves(f: &FieldReader<'_>, report: &mut VerifyReport) -> Result<(), FormatError> {
+/// BEAMS, TILES and LEAVES (§5.5, §5.6): directions laid out without gaps, each tile's block
+/// where its entry says, blocks in tile order without gaps, every block's invariants
+/// ([`Block::check`]); and the STATISTICS those tiles add up to, for [`check_statistics`].
+fn check_beams_tiles_leaves(f: &FieldReader<'_>, report: &mut VerifyReport) -> Result<StatisticsRecord, FormatError> {
     let n2 = f.params.tile_resolution as usize * f.params.tile_resolution as usize;
     let tri_count = f.triangles.len() as u64;
-    let (mut leaf_base, mut id_base) = (0u64, 0u64);
+    let max_leaves = 1u64 << f.params.max_depth;
+    let mut stats = StatisticsRecord::zeroed_record();
+    stats.tile_count = f.tiles.len() as u64;
+    let mut base = 0u64;
     for (j, beam) in f.beams.iter().enumerate() {
         let bad = |problem: String| invalid("BEAMS", format!("direction {j}: {problem}"));
-        if beam.leaf_base != leaf_base || beam.id_base != id_base {
+        if beam.leaves_base != base {
             return Err(bad(format!(
-                "leaf_base {} / id_base {} do not follow the previous direction (expected {leaf_base} / {id_base})",
-                beam.leaf_base, beam.id_base
+                "leaves_base {} does not follow the previous direction (expected {base})",
+                beam.leaves_base
             )));
         }
-        if beam.id_count > u32::MAX as u64 || beam.leaf_count > u32::MAX as u64 {
-            return Err(bad("leaf_count or id_count exceeds 2^32 - 1".into()));
+        if beam.leaves_words > u32::MAX as u64 {
+            return Err(bad(format!("leaves_words {} exceeds 2^32 - 1", beam.leaves_words)));
         }
-        let bounds_end = leaf_base + beam.leaf_count + 1;
-        let ids_end = id_base + beam.id_count;
-        if bounds_end > f.leaf_bounds.len() as u64 || ids_end > f.triangle_ids.len() as u64 {
-            return Err(bad("leaves or ids run past the end of LEAF_BOUNDS or TRIANGLE_IDS".into()));
+        let end = base + beam.leaves_words;
+        if end > f.leaves.len() as u64 {
+            return Err(bad("its blocks run past the end of LEAVES".into()));
         }
-        let bounds = &f.leaf_bounds[leaf_base as usize..bounds_end as usize];
-        let ids = &f.triangle_ids[id_base as usize..ids_end as usize];
-        if bounds[0] != 0 || *bounds.last().unwrap() as u64 != beam.id_count {
-            return Err(invalid("LEAF_BOUNDS", format!("direction {j}: bounds do not run from 0 to id_count")));
-        }
-        if let Some(k) = bounds.windows(2).position(|w| w[0] > w[1]) {
-            return Err(invalid("LEAF_BOUNDS", format!("direction {j}: bound {k} decreases")));
-        }
-        let tiles = &f.tiles[j * n2..(j + 1) * n2];
-        let mut next_leaf = 0u64;
-        for (i, tile) in tiles.iter().enumerate() {
-            let bad = |problem: String| invalid("TILES", format!("direction {j}, tile {i}: {problem}"));
-            if tile.first_leaf as u64 != next_leaf {
-                return Err(bad(format!("first_leaf {} should be {next_leaf}", tile.first_leaf)));
+        let words = &f.leaves[base as usize..end as usize];
+        let (mut next, mut leaves, mut refs) = (0u64, 0u64, 0u64);
+        for (i, &entry) in f.tiles[j * n2..(j + 1) * n2].iter().enumerate() {
+            let bad = |section: &'static str, problem: String| {
+                invalid(section, format!("direction {j}, tile {i}: {problem}"))
+            };
+            if entry == EMPTY_TILE {
+                stats.empty_tiles += 1;
+                continue;
             }
-            if tile.depth as u32 > f.params.max_depth || tile.reserved != [0; 3] {
-                return Err(bad(format!("depth {} exceeds max_depth or reserved bytes set", tile.depth)));
+            if entry as u64 != next {
+                return Err(bad("TILES", format!("block at word {entry}, expected {next} (blocks follow tile order)")));
             }
-            let leaves = 1u64 << tile.depth;
-            let first = tile.first_leaf as usize;
-            if next_leaf + leaves > beam.leaf_count {
-                return Err(bad("leaves run past the direction's leaf_count".into()));
+            let block = Block::parse(&words[next as usize..])
+                .ok_or_else(|| bad("LEAVES", "the block's header does not fit in its direction's words".into()))?;
+            let k = block.leaf_count() as u64;
+            if k > max_leaves {
+                return Err(bad("LEAVES", format!("{k} leaves, over 2^max_depth = {max_leaves}")));
             }
-            let tile_bounds = &bounds[first..first + leaves as usize + 1];
-            let empty = tile_bounds[0] == tile_bounds[leaves as usize];
-            if tile.is_empty() != empty || (empty && (tile.depth != 0 || *tile != TileRecord::empty(tile.first_leaf))) {
-                return Err(bad("empty-tile encoding is inconsistent with its leaves".into()));
-            }
-            for w in tile_bounds.windows(2) {
-                let leaf = &ids[w[0] as usize..w[1] as usize];
-                if let Some(&id) = leaf.iter().find(|&&id| id as u64 >= tri_count) {
-                    return Err(invalid(
-                        "TRIANGLE_IDS",
-                        format!("direction {j}, tile {i}: id {id} >= triangle_count {tri_count}"),
-                    ));
-                }
-                if leaf.windows(2).any(|p| p[0] >= p[1]) {
-                    return Err(invalid(
-                        "TRIANGLE_IDS",
-                        format!("direction {j}, tile {i}: ids in a leaf are not strictly increasing"),
-                    ));
-                }
-            }
-            next_leaf += leaves;
+            let distinct = block.check(tri_count).map_err(|problem| bad("LEAVES", problem))?;
+            next += block.words() as u64;
+            leaves += k;
+            refs += block.ref_count() as u64;
+            let depth = k.next_power_of_two().trailing_zeros();
+            stats.tile_triangle_sum += distinct;
+            stats.max_tile_triangles = stats.max_tile_triangles.max(distinct as u32);
+            stats.max_depth_used = stats.max_depth_used.max(depth);
+            stats.depth_histogram[depth as usize] += 1;
         }
-        if next_leaf != beam.leaf_count {
-            return Err(invalid(
-                "TILES",
-                format!("direction {j}: tiles hold {next_leaf} leaves, BEAMS says {}", beam.leaf_count),
-            ));
+        if next != beam.leaves_words {
+            return Err(bad(format!("its blocks take {next} words, leaves_words says {}", beam.leaves_words)));
         }
+        if leaves != beam.leaf_count || refs != beam.ref_count {
+            return Err(bad(format!(
+                "its blocks hold {leaves} leaves and {refs} refs, BEAMS says {} and {}",
+                beam.leaf_count, beam.ref_count
+            )));
+        }
+        stats.leaf_count += leaves;
+        stats.id_count += refs;
         report.tiles += n2 as u64;
-        report.ids += beam.id_count;
-        leaf_base = bounds_end;
-        id_base = ids_end;
+        report.ids += refs;
+        base = end;
     }
-    if leaf_base != f.leaf_bounds.len() as u64 || id_base != f.triangle_ids.len() as u64 {
-        return Err(invalid("BEAMS", "directions do not cover LEAF_BOUNDS and TRIANGLE_IDS exactly".into()));
+    if base != f.leaves.len() as u64 {
+        return Err(invalid("BEAMS", "directions do not cover LEAVES exactly".into()));
     }
-    Ok(())
+    Ok(stats)
 }
 
 fn check_triangles_and_provenance(f: &FieldReader<'_>) -> Result<(), FormatError> {
     for (i, t) in f.triangles.iter().enumerate() {
-        if t.v.iter().any(|v| v[3] != 0.0 || !v[..3].iter().all(|c| c.is_finite())) {
-            return Err(invalid(
-                "TRIANGLES",
-                format!("triangle {i}: a coordinate is not finite or padding is not zero"),
-            ));
+        if !t.v.iter().flatten().all(|c| c.is_finite()) {
+            return Err(invalid("TRIANGLES", format!("triangle {i}: a coordinate is not finite")));
         }
     }
     for (i, p) in f.provenance.iter().enumerate() {
@@ -320,46 +313,30 @@ fn check_lights(f: &FieldReader<'_>) -> Result<(), FormatError> {
     Ok(())
 }
 
-/// Recounts STATISTICS from the tiles. Only sound after `check_beams_tiles_leaves` passed.
-fn recount_statistics(f: &FieldReader<'_>) -> StatisticsRecord {
-    let n2 = f.params.tile_resolution as usize * f.params.tile_resolution as usize;
-    let mut s = StatisticsRecord::zeroed_record();
-    s.tile_count = f.tiles.len() as u64;
-    for (j, beam) in f.beams.iter().enumerate() {
-        let bounds = &f.leaf_bounds[beam.leaf_base as usize..];
-        let ids = &f.triangle_ids[beam.id_base as usize..];
-        for tile in &f.tiles[j * n2..(j + 1) * n2] {
-            if tile.is_empty() {
-                s.empty_tiles += 1;
-                continue;
-            }
-            let first = tile.first_leaf as usize;
-            let leaves = 1usize << tile.depth;
-            let lo = bounds[first] as usize;
-            let hi = bounds[first + leaves] as usize;
-            let distinct = count_distinct(&ids[lo..hi]);
-            s.tile_triangle_sum += distinct;
-            s.max_tile_triangles = s.max_tile_triangles.max(distinct as u32);
-            s.max_depth_used = s.max_depth_used.max(tile.depth as u32);
-            s.depth_histogram[tile.depth as usize] += 1;
-        }
-        s.leaf_count += beam.leaf_count;
-        s.id_count += beam.id_count;
+/// DUPLICATES (§5.13): sorted by the kept triangle, each naming a triangle and a source that
+/// exist, and as many as SCENE says.
+fn check_duplicates(f: &FieldReader<'_>) -> Result<(), FormatError> {
+    let bad = |problem: String| invalid("DUPLICATES", problem);
+    if f.duplicates.len() as u64 != f.scene.dropped_duplicates {
+        return Err(bad(format!(
+            "{} records, SCENE counts {} merged duplicates",
+            f.duplicates.len(),
+            f.scene.dropped_duplicates
+        )));
     }
-    s
+    for (i, d) in f.duplicates.iter().enumerate() {
+        if d.triangle as usize >= f.triangles.len() || d.source as usize >= f.sources.len() {
+            return Err(bad(format!("record {i}: triangle {} or source {} out of range", d.triangle, d.source)));
+        }
+        if i > 0 && f.duplicates[i - 1].triangle > d.triangle {
+            return Err(bad(format!("record {i}: not sorted by triangle")));
+        }
+    }
+    Ok(())
 }
 
-/// Distinct values in a tile's ids (each leaf sorted; a triangle may sit in several leaves).
-fn count_distinct(ids: &[u32]) -> u64 {
-    let mut v = ids.to_vec();
-    v.sort_unstable();
-    v.dedup();
-    v.len() as u64
-}
-
-fn check_statistics(f: &FieldReader<'_>) -> Result<(), FormatError> {
-    let recount = recount_statistics(f);
-    if recount != *f.statistics {
+fn check_statistics(f: &FieldReader<'_>, recount: &StatisticsRecord) -> Result<(), FormatError> {
+    if recount != f.statistics {
         return Err(invalid(
             "STATISTICS",
             format!(

@@ -337,8 +337,8 @@ mod tests {
         let file = File::options().read(true).write(true).create(true).truncate(true).open(&tmp).unwrap();
         let mut f = FieldFile::create(file, 3).unwrap();
         f.append(SectionKind::Strings, b"hello").unwrap();
-        let mut reserved = f.reserve(SectionKind::LeafBounds, 8).unwrap();
-        let mut streamed = f.stream(SectionKind::TriangleIds).unwrap();
+        let mut reserved = f.reserve(SectionKind::Leaves, 8).unwrap();
+        let mut streamed = f.stream(SectionKind::Tiles).unwrap();
         assert!(f.append(SectionKind::Scene, &[0; 128]).is_err(), "no section may follow an open stream");
         streamed.write_all(&[1, 0, 0, 0, 2, 0, 0, 0, 3, 0, 0, 0]).unwrap();
         reserved.write_all(&[9, 0, 0, 0]).unwrap();
@@ -353,10 +353,7 @@ mod tests {
         let (h, table) = crate::reader::read_header_and_table(&bytes).unwrap();
         assert_eq!(h.input_hash, [7; 32]);
         let kinds: Vec<u32> = table.iter().map(|e| e.kind).collect();
-        assert_eq!(
-            kinds,
-            [SectionKind::Strings as u32, SectionKind::LeafBounds as u32, SectionKind::TriangleIds as u32]
-        );
+        assert_eq!(kinds, [SectionKind::Strings as u32, SectionKind::Leaves as u32, SectionKind::Tiles as u32]);
         for e in table {
             let raw = &bytes[e.offset as usize..(e.offset + e.stored_length) as usize];
             assert_eq!(*blake3::hash(raw).as_bytes(), e.raw_hash);

@@ -24,12 +24,25 @@ pub use triangle::{TriHit, TriRay, is_degenerate};
 
 /// The reference intersector: every triangle, every ray, in id order, with the same leaf kernel
 /// as the accelerated paths. Slow on purpose; the baseline every fast path is tested against.
+#[derive(Clone, Copy, Debug)]
 pub struct BruteForce<'a> {
     /// The triangles; a hit's `prim` is an index into this slice.
     pub triangles: &'a [[[f32; 3]; 3]],
+    /// The point the triangles' coordinates are relative to (world origin: zero).
+    pub origin: [f64; 3],
 }
 
-impl BruteForce<'_> {
+impl<'a> BruteForce<'a> {
+    /// Over triangles in world coordinates.
+    pub fn new(triangles: &'a [[[f32; 3]; 3]]) -> Self {
+        BruteForce { triangles, origin: [0.0; 3] }
+    }
+
+    /// Over triangles stored relative to `origin`, as a field stores them (`TriRay::relative`).
+    pub fn relative(triangles: &'a [[[f32; 3]; 3]], origin: [f64; 3]) -> Self {
+        BruteForce { triangles, origin }
+    }
+
     /// Every id in order. (At most 2³² − 1 triangles, as in a field.)
     fn ids(&self) -> std::ops::Range<u32> {
         0..self.triangles.len() as u32
@@ -42,7 +55,7 @@ impl BruteForce<'_> {
         }
         counter.ray();
         let mut best = Closest::new(ray.tmax);
-        TriRay::new(ray).closest_in(self.triangles, self.ids(), &mut best, counter);
+        TriRay::relative(ray, self.origin).closest_in(self.triangles, self.ids(), &mut best, counter);
         best.hit
     }
 
@@ -52,7 +65,7 @@ impl BruteForce<'_> {
             return None;
         }
         counter.ray();
-        TriRay::new(ray).any_in(self.triangles, self.ids(), ray.tmax, counter)
+        TriRay::relative(ray, self.origin).any_in(self.triangles, self.ids(), ray.tmax, counter)
     }
 }
 
@@ -85,7 +98,7 @@ mod tests {
     fn shared_edges_are_watertight() {
         let q = [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]];
         let tris = [[q[0], q[1], q[2]], [q[0], q[2], q[3]]];
-        let bf = BruteForce { triangles: &tris };
+        let bf = BruteForce::new(&tris);
         let mut state = 0x2545f4914f6cdd1du64;
         let mut rnd = || {
             state ^= state << 13;

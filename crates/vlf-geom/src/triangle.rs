@@ -22,10 +22,10 @@ use crate::ray::Ray;
 /// Per-ray constants of the test, computed once per ray.
 #[derive(Clone, Copy, Debug)]
 pub struct TriRay {
+    /// The ray's origin, its components in the order `kx, ky, kz`.
     org: [f64; 3],
-    kx: usize,
-    ky: usize,
-    kz: usize,
+    /// The axes of the sheared frame: `kz` the ray's dominant axis.
+    k: [usize; 3],
     sx: f64,
     sy: f64,
     sz: f64,
@@ -48,6 +48,14 @@ impl TriRay {
     /// Precomputes the shear for `ray`. The ray must be valid ([`Ray::is_valid`]).
     #[inline]
     pub fn new(ray: &Ray) -> Self {
+        Self::relative(ray, [0.0; 3])
+    }
+
+    /// [`TriRay::new`] for triangles whose vertices are stored relative to `origin` (a field's
+    /// centre, `formats/vlf.md` §5.7): the ray's origin becomes `ray.org − origin`, computed in
+    /// f64, so a scene far from the world's origin keeps the precision of its own size.
+    #[inline]
+    pub fn relative(ray: &Ray, origin: [f64; 3]) -> Self {
         let d = ray.dir.map(f64::from);
         let a = [d[0].abs(), d[1].abs(), d[2].abs()];
         let kz = if a[0] > a[1] {
@@ -63,31 +71,25 @@ impl TriRay {
         if d[kz] < 0.0 {
             std::mem::swap(&mut kx, &mut ky);
         }
-        TriRay {
-            org: ray.org.map(f64::from),
-            kx,
-            ky,
-            kz,
-            sx: d[kx] / d[kz],
-            sy: d[ky] / d[kz],
-            sz: 1.0 / d[kz],
-            tmin: ray.tmin as f64,
-        }
+        let org = [kx, ky, kz].map(|i| ray.org[i] as f64 - origin[i]);
+        TriRay { org, k: [kx, ky, kz], sx: d[kx] / d[kz], sy: d[ky] / d[kz], sz: 1.0 / d[kz], tmin: ray.tmin as f64 }
     }
 
     /// Tests one triangle; a hit must have `tmin ≤ t ≤ tmax`.
     #[inline(always)]
     pub fn intersect(&self, v0: [f32; 3], v1: [f32; 3], v2: [f32; 3], tmax: f32) -> Option<TriHit> {
-        let o = self.org;
-        let rel = |v: [f32; 3]| [v[0] as f64 - o[0], v[1] as f64 - o[1], v[2] as f64 - o[2]];
-        let (a, b, c) = (rel(v0), rel(v1), rel(v2));
-        let (kx, ky, kz) = (self.kx, self.ky, self.kz);
-        let ax = a[kx] - self.sx * a[kz];
-        let ay = a[ky] - self.sy * a[kz];
-        let bx = b[kx] - self.sx * b[kz];
-        let by = b[ky] - self.sy * b[kz];
-        let cx = c[kx] - self.sx * c[kz];
-        let cy = c[ky] - self.sy * c[kz];
+        // Each vertex relative to the ray's origin, its components picked in the frame's order as
+        // they are read (indexing the vertex in memory, not an array of registers).
+        let [ox, oy, oz] = self.org;
+        let [kx, ky, kz] = self.k;
+        let rel = |v: &[f32; 3]| [v[kx] as f64 - ox, v[ky] as f64 - oy, v[kz] as f64 - oz];
+        let (a, b, c) = (rel(&v0), rel(&v1), rel(&v2));
+        let ax = a[0] - self.sx * a[2];
+        let ay = a[1] - self.sy * a[2];
+        let bx = b[0] - self.sx * b[2];
+        let by = b[1] - self.sy * b[2];
+        let cx = c[0] - self.sx * c[2];
+        let cy = c[1] - self.sy * c[2];
 
         let u = cx * by - cy * bx;
         let v = ax * cy - ay * cx;
@@ -99,9 +101,9 @@ impl TriRay {
         if det == 0.0 {
             return None;
         }
-        let az = self.sz * a[kz];
-        let bz = self.sz * b[kz];
-        let cz = self.sz * c[kz];
+        let az = self.sz * a[2];
+        let bz = self.sz * b[2];
+        let cz = self.sz * c[2];
         let rcp = 1.0 / det;
         let t = (u * az + v * bz + w * cz) * rcp;
         if !(t >= self.tmin && t <= tmax as f64) {

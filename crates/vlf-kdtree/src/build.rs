@@ -67,6 +67,7 @@ pub(crate) fn build(triangles: &[Tri], params: KdParams) -> KdTree {
             bounds: None,
             margin: 0.0,
             max_depth_reached: 0,
+            origin: [0.0; 3],
         };
     }
     // 2⁻³² of the scene's magnitude: far above the f64 rounding of clipping and traversal (about
@@ -123,6 +124,7 @@ pub(crate) fn build(triangles: &[Tri], params: KdParams) -> KdTree {
         bounds: Some((lo, hi)),
         margin: mu,
         max_depth_reached,
+        origin: [0.0; 3],
     }
 }
 

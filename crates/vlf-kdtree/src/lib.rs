@@ -49,6 +49,14 @@ impl KdTree {
         build::build(triangles, params)
     }
 
+    /// The tree of triangles given relative to `origin` (as a field stores them), queried with
+    /// rays in world coordinates: the ray is moved by `−origin` in f64, as the field and
+    /// `vlf_geom::BruteForce::relative` move it, so the three answer alike.
+    pub fn relative_to(mut self, origin: [f64; 3]) -> KdTree {
+        self.origin = origin;
+        self
+    }
+
     /// The parameters the tree was built with (depth clamped to [`MAX_DEPTH`]).
     pub fn params(&self) -> KdParams {
         self.params
@@ -131,7 +139,7 @@ impl KdTree {
             return None;
         }
         let (lo, hi) = self.root?;
-        let o = ray.org.map(f64::from);
+        let o: [f64; 3] = std::array::from_fn(|i| ray.org[i] as f64 - self.origin[i]);
         // `+ 0.0` turns −0 into +0, so a zero component always gives +∞ and "positive" below.
         let inv = ray.dir.map(|d| 1.0 / (d as f64 + 0.0));
         // Clip to the (grown) scene box. An axis the ray is parallel to only tests the origin.
@@ -156,7 +164,7 @@ impl KdTree {
         }
         counter.ray();
 
-        let tri_ray = TriRay::new(ray);
+        let tri_ray = TriRay::relative(ray, self.origin);
         let tris = &self.triangles[..];
         let mut best = Closest::new(ray.tmax);
         let mut stack = [Entry { node: 0, t0: 0.0, t1: 0.0 }; MAX_DEPTH as usize];
@@ -269,7 +277,7 @@ mod tests {
         let q = [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]];
         let tris = [[q[0], q[1], q[2]], [q[0], q[2], q[3]]];
         let tree = KdTree::build(&tris, KdParams { max_depth: 8, leaf_size: 1 });
-        let bf = BruteForce { triangles: &tris };
+        let bf = BruteForce::new(&tris);
         for i in 0..=16 {
             for j in 0..=16 {
                 let (x, y) = (i as f32 / 16.0, j as f32 / 16.0);

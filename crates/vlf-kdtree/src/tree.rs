@@ -117,4 +117,6 @@ pub struct KdTree {
     pub(crate) bounds: Option<([f32; 3], [f32; 3])>,
     pub(crate) margin: f64,
     pub(crate) max_depth_reached: u32,
+    /// The point the triangles' coordinates are relative to (zero: world coordinates).
+    pub(crate) origin: [f64; 3],
 }

@@ -76,6 +76,8 @@ const MAX_SMOOTHING_VALENCE: usize = 256;
 #[derive(Clone, Debug)]
 pub struct Scene {
     triangles: Vec<[[f32; 3]; 3]>,
+    /// The point `triangles` are relative to, world coordinates.
+    origin: V3,
     /// Unit shading normals per corner, or `None` for flat shading.
     normals: Option<Vec<[[f32; 3]; 3]>>,
     /// Index into `surfaces` of each triangle's surface.
@@ -100,19 +102,22 @@ impl Scene {
     /// ([`Field::material`]) or [`Surface::DEFAULT`].
     pub fn from_field(field: &Field, options: &SceneOptions) -> Scene {
         let count = field.triangle_count();
-        let triangles: Vec<[[f32; 3]; 3]> = (0..count).map(|i| field.triangle(i).unwrap_or_default()).collect();
+        let triangles: Vec<[[f32; 3]; 3]> = (0..count).map(|i| field.triangle_local(i).unwrap_or_default()).collect();
         let mut surfaces: Vec<Surface> = field.materials().map(|m| Surface::from_material(&m)).collect();
         let default = surfaces.len() as u32;
         surfaces.push(Surface::DEFAULT);
         let surface_of = (0..count).map(|i| field.material_index(i).map_or(default, |m| m as u32)).collect();
         let (center, radius) = field.bounding_sphere();
-        Scene::new(triangles, surfaces, surface_of, center, radius, options)
+        Scene::new(triangles, field.origin(), surfaces, surface_of, center, radius, options)
     }
 
-    /// A scene from parts: `surface_of[i]` indexes `surfaces` (an index out of range gets
-    /// [`Surface::DEFAULT`]); `center` and `radius` bound the triangles.
+    /// A scene from parts: `triangles` relative to `origin` (as a field stores them),
+    /// `surface_of[i]` indexes `surfaces` (an index out of range gets [`Surface::DEFAULT`]);
+    /// `center` and `radius` bound the triangles in world coordinates.
+    #[allow(clippy::too_many_arguments)]
     pub fn new(
         triangles: Vec<[[f32; 3]; 3]>,
+        origin: V3,
         mut surfaces: Vec<Surface>,
         mut surface_of: Vec<u32>,
         center: V3,
@@ -128,12 +133,18 @@ impl Scene {
             }
         }
         let normals = options.smooth.then(|| smooth_normals(&triangles, options.crease_degrees));
-        Scene { triangles, normals, surface_of, surfaces, center, radius }
+        Scene { triangles, origin, normals, surface_of, surfaces, center, radius }
     }
 
-    /// The triangles, by id (to build another acceleration structure over the same scene).
+    /// The triangles, by id, relative to [`Scene::origin`] (to build another acceleration
+    /// structure over the same scene, e.g. `BruteForce::relative(scene.triangles(), scene.origin())`).
     pub fn triangles(&self) -> &[[[f32; 3]; 3]] {
         &self.triangles
+    }
+
+    /// The point the triangles are relative to, in world coordinates.
+    pub fn origin(&self) -> V3 {
+        self.origin
     }
 
     /// Centre and radius of a sphere around the scene.
@@ -155,7 +166,7 @@ impl Scene {
         let [a, b, c] = t.map(widen);
         let (u, v) = (u as f64, v as f64);
         let w = 1.0 - u - v;
-        let point: V3 = std::array::from_fn(|i| w * a[i] + u * b[i] + v * c[i]);
+        let point: V3 = std::array::from_fn(|i| self.origin[i] + (w * a[i] + u * b[i] + v * c[i]));
         let e1: V3 = std::array::from_fn(|i| b[i] - a[i]);
         let e2: V3 = std::array::from_fn(|i| c[i] - a[i]);
         let wound_normal = normalize(cross(e1, e2))?;

@@ -57,6 +57,7 @@
 
 #![deny(missing_docs)]
 
+mod filter;
 mod query;
 mod scene;
 
@@ -258,6 +259,13 @@ impl OpenOptions {
         // read-only and lives as long as the `Field` (it is the self_cell owner), or, for a
         // packed field, until it is decoded.
         let map = unsafe { memmap2::Mmap::map(&file) }.map_err(io)?;
+        // Queries jump around a big field: ask for huge pages, so that fewer translations miss
+        // the TLB (where the kernel and file system support them for file mappings; elsewhere
+        // this is a no-op). O(1): it changes how the mapping is faulted in, not the file.
+        #[cfg(target_os = "linux")]
+        if std::env::var_os("VLF_NO_HUGEPAGE").is_none() {
+            let _ = map.advise(memmap2::Advice::HugePage);
+        }
         let field = match self.unpack_if_packed(&map) {
             Ok(Some(unpacked)) => Field::from_unpacked(unpacked),
             Ok(None) => Field::from_backing(Backing::Map(map), None),
@@ -386,6 +394,20 @@ impl Field {
         self.view().any_hit(ray)
     }
 
+    /// [`Field::closest_hit`] for a ray whose origin is given relative to [`Field::origin`]: the
+    /// same answer for the same ray, with the precision of the scene's own size however far the
+    /// scene is from the world's origin.
+    #[inline]
+    pub fn closest_hit_local(&self, ray: &Ray) -> Option<Hit> {
+        self.view().closest_hit_local(ray)
+    }
+
+    /// [`Field::any_hit`] for a ray given relative to [`Field::origin`].
+    #[inline]
+    pub fn any_hit_local(&self, ray: &Ray) -> bool {
+        self.view().any_hit_local(ray)
+    }
+
     /// Closest hits of a batch on the calling thread: `out[i]` is the hit record of `rays[i]`
     /// ([`Hit::MISS`] on a miss).
     ///
@@ -445,9 +467,27 @@ impl Field {
     /// `id` is not below [`Field::triangle_count`], or if the file's provenance of that triangle
     /// is corrupt (a reference out of bounds or a name that is not UTF-8). O(1).
     pub fn provenance(&self, id: u32) -> Option<Provenance<'_>> {
+        let p = self.reader().provenance.get(id as usize)?;
+        self.source_provenance(p.source, p.index)
+    }
+
+    /// Where the triangles merged into triangle `id` came from: input triangles with exactly its
+    /// vertices (`formats/vlf.md` §5.13), which a ray cannot tell apart from it. Empty for most
+    /// triangles; [`Field::provenance`] gives the kept one's.
+    pub fn duplicates(&self, id: u32) -> impl Iterator<Item = Provenance<'_>> + '_ {
+        let d = self.reader().duplicates;
+        let first = d.partition_point(|r| r.triangle < id);
+        d[first..]
+            .iter()
+            .take_while(move |r| r.triangle == id)
+            .filter_map(|r| self.source_provenance(r.source, r.index))
+    }
+
+    /// The provenance of triangle number `index` of source `source`, if the file's references are
+    /// sound.
+    fn source_provenance(&self, source: u32, index: u32) -> Option<Provenance<'_>> {
         let r = self.reader();
-        let p = r.provenance.get(id as usize)?;
-        let s = r.sources.get(p.source as usize)?;
+        let s = r.sources.get(source as usize)?;
         let input = r.inputs.get(s.input as usize)?;
         Some(Provenance {
             input: r.string(input.name_offset, input.name_length)?,
@@ -457,15 +497,30 @@ impl Field {
             primitive: s.primitive,
             node: (s.node != NO_INDEX).then_some(s.node),
             material: (s.material != NO_INDEX).then_some(s.material),
-            index: p.index,
+            index,
         })
     }
 
-    /// The vertices of triangle `id` (world space, as baked), or `None` if `id` is not below
-    /// [`Field::triangle_count`]. A hit's point is `(1 − u − v)·v0 + u·v1 + v·v2`.
-    pub fn triangle(&self, id: u32) -> Option<[[f32; 3]; 3]> {
-        let t = self.reader().triangles.get(id as usize)?;
-        Some([t.vertex(0), t.vertex(1), t.vertex(2)])
+    /// The vertices of triangle `id` in world coordinates (its stored vertices plus
+    /// [`Field::origin`], in f64), or `None` if `id` is not below [`Field::triangle_count`]. A
+    /// hit's point is `(1 − u − v)·v0 + u·v1 + v·v2`.
+    pub fn triangle(&self, id: u32) -> Option<[[f64; 3]; 3]> {
+        let c = self.origin();
+        let t = self.triangle_local(id)?;
+        Some(t.map(|v| std::array::from_fn(|i| v[i] as f64 + c[i])))
+    }
+
+    /// The vertices of triangle `id` as stored: relative to [`Field::origin`], in f32.
+    pub fn triangle_local(&self, id: u32) -> Option<[[f32; 3]; 3]> {
+        Some(self.reader().triangles.get(id as usize)?.v)
+    }
+
+    /// The point the field's triangles are stored relative to: the centre of the scene, in world
+    /// coordinates (`formats/vlf.md` §5.7). Rays near a scene far from the world's origin are best
+    /// given relative to it ([`Field::closest_hit_local`]): an f32 ray origin at 10⁷ is only
+    /// precise to about a unit.
+    pub fn origin(&self) -> [f64; 3] {
+        self.reader().scene.center
     }
 
     /// The content hash (`formats/vlf.md` §3.1), which identifies these exact bytes. For a packed
@@ -501,10 +556,11 @@ impl Field {
         (self.reader().scene.center, self.reader().scene.radius)
     }
 
-    /// The corners of the box around every vertex, in world units: the scene's extent, tighter
-    /// than [`Field::bounding_sphere`].
+    /// The corners of the box around every vertex, in world coordinates: the scene's extent,
+    /// tighter than [`Field::bounding_sphere`].
     pub fn bounds(&self) -> ([f64; 3], [f64; 3]) {
-        (self.reader().scene.aabb_min, self.reader().scene.aabb_max)
+        let (s, c) = (self.reader().scene, self.origin());
+        (std::array::from_fn(|i| s.aabb_min[i] + c[i]), std::array::from_fn(|i| s.aabb_max[i] + c[i]))
     }
 
     /// The format version of the file, `(major, minor)` (`formats/vlf.md` §3.4).

@@ -1,24 +1,33 @@
 //! The ray query (paper §3.3 and §5), answered straight from the file bytes.
 //!
-//! 1. Choose the stored direction nearest the ray's by the constant-time lattice lookup.
-//! 2. Rotate the ray into that direction's canonical frame and clip it to the bounding sphere.
+//! 1. Clip the ray to the scene: its bounding sphere and its box, both grown by the margin `μ`.
+//! 2. Choose the stored direction nearest the ray's by the constant-time lattice lookup, and rotate
+//!    the ray into that direction's canonical frame.
 //! 3. Walk, front to back, every tile its projection crosses (Amanatides and Woo 1987 in the
 //!    tile grid; the paper's Figure 2: a ray not parallel to the beams crosses several tiles).
-//! 4. In each tile, visit the 1D-BSP leaves the ray's z range passes through, in ray order, and
-//!    test their triangles with the watertight kernel.
+//! 4. In each tile, visit the leaves of its block (`formats/vlf.md` §5.6) that the ray's z range
+//!    passes through, in ray order. A leaf's refs are first tested by their quantized boxes
+//!    against the ray's box over the leaf (sixteen at a time, [`crate::filter`]); only those that
+//!    pass reach the watertight triangle kernel.
 //! 5. Stop as soon as the best hit lies within the part of the ray already searched.
 //!
+//! Triangles are stored relative to the scene's centre, and the ray is moved there first (in f64),
+//! so a scene far from the world's origin keeps its precision ([`FieldView::closest_hit_local`]
+//! takes rays already given relative to it).
+//!
 //! Geometry up to the triangle test is in f64, so its rounding stays far below the margin `μ` by
-//! which the baker grew every footprint (`formats/vlf.md` §6.2): the walk can only see *more*
-//! candidates than the exact one, never fewer. Every index read from the file is bounds-checked
-//! where it is used, so a file that passed the open checks but lies inside a section yields wrong
-//! answers at worst, never a panic or an out-of-bounds read.
+//! which the baker grew every footprint, z range and box (`formats/vlf.md` §6.2): the walk can only
+//! see *more* candidates than the exact one, never fewer. Every index read from the file is
+//! bounds-checked where it is used, so a file that passed the open checks but lies inside a section
+//! yields wrong answers at worst, never a panic, an out-of-bounds read or unbounded work.
 
 // Comparisons are written `!(a <= b)` on purpose throughout: a NaN (from a lying file) then takes
 // the reject branch.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
-use vlf_format::{BeamRecord, FieldReader, LOOKUP_FLIP, LOOKUP_NONE, MAX_DEPTH, TileRecord, TriangleRecord, Z_LEVELS};
+use crate::filter::{Passing, limits};
+use vlf_format::block::{BOX_CELLS, Block, LeafRefs};
+use vlf_format::{BeamRecord, EMPTY_TILE, FieldReader, LOOKUP_FLIP, LOOKUP_NONE, TriangleRecord, Z_LEVELS};
 use vlf_geom::frame::mul;
 use vlf_geom::lattice::candidates;
 use vlf_geom::{Closest, Counter, Hit, Ray, TriRay, Triangles};
@@ -29,8 +38,7 @@ struct FieldTriangles<'a>(&'a [TriangleRecord]);
 impl Triangles for FieldTriangles<'_> {
     #[inline(always)]
     fn vertices(&self, id: u32) -> Option<[[f32; 3]; 3]> {
-        let t = self.0.get(id as usize)?;
-        Some([t.vertex(0), t.vertex(1), t.vertex(2)])
+        Some(self.0.get(id as usize)?.v)
     }
 
     #[inline(always)]
@@ -47,27 +55,61 @@ pub struct FieldView<'a> {
     lattice_n: u32,
     center: [f64; 3],
     radius: f64,
+    margin: f64,
     clip_radius_sq: f64,
+    /// The scene's box relative to the centre, grown by the margin.
+    box_lo: [f64; 3],
+    box_hi: [f64; 3],
     tile_width: f64,
     inv_tile_width: f64,
+    /// Box cells per world unit: `BOX_CELLS / tile_width`.
+    cells_per_unit: f64,
     z_step: f64,
 }
 
-/// A ray in one direction's canonical frame, clipped to the sphere.
+/// A ray in one direction's canonical frame, clipped to the scene.
 struct Setup {
     dir: usize,
     /// Canonical origin (relative to the centre) and direction.
     o: [f64; 3],
     d: [f64; 3],
-    /// The parameter range inside the (grown) bounding sphere and `[tmin, tmax]`.
+    /// The parameter range inside the (grown) scene and `[tmin, tmax]`.
     t0: f64,
     t1: f64,
 }
 
-/// The outcome of visiting one leaf.
+/// What to do after a leaf.
 enum Visit {
     Continue,
     Done,
+}
+
+/// What a visit of a leaf sees: the tile's block, the leaf's refs, and where the ray is.
+struct Leaf<'b, 'a> {
+    block: &'b Block<'a>,
+    refs: LeafRefs,
+    /// The ray parameters at which the ray enters and leaves the leaf.
+    enter_t: f64,
+    exit_t: f64,
+    /// The ray in canonical coordinates relative to the tile's corner, and the box-cell scale.
+    o: [f64; 2],
+    d: [f64; 2],
+    cells_per_unit: f64,
+    margin: f64,
+}
+
+impl<'a> Leaf<'_, 'a> {
+    /// The ids of the leaf's refs whose boxes meet the ray's box over `[enter_t, t_far]` (the
+    /// leaf, or the part of it before the best hit so far), grown by the margin.
+    #[inline(always)]
+    fn passing(&self, t_far: f64) -> Passing<'a> {
+        let cell = |v: f64| ((v * self.cells_per_unit) as i64).clamp(0, BOX_CELLS as i64 - 1) as u8;
+        let (mu, o, d) = (self.margin, self.o, self.d);
+        let (xa, xb) = (o[0] + self.enter_t * d[0], o[0] + t_far * d[0]);
+        let (ya, yb) = (o[1] + self.enter_t * d[1], o[1] + t_far * d[1]);
+        let limits = limits(cell(xa.min(xb) - mu), cell(xa.max(xb) + mu), cell(ya.min(yb) - mu), cell(ya.max(yb) + mu));
+        Passing::new(self.block, self.refs, limits)
+    }
 }
 
 impl<'a> FieldView<'a> {
@@ -83,11 +125,21 @@ impl<'a> FieldView<'a> {
             lattice_n: p.lattice_n,
             center: s.center,
             radius: s.radius,
+            margin: p.margin,
             clip_radius_sq: grown * grown,
+            box_lo: s.aabb_min.map(|v| v - p.margin),
+            box_hi: s.aabb_max.map(|v| v + p.margin),
             tile_width,
             inv_tile_width: 1.0 / tile_width,
+            cells_per_unit: BOX_CELLS as f64 / tile_width,
             z_step: 2.0 * s.radius / Z_LEVELS as f64,
         }
+    }
+
+    /// The point the field's triangles are stored relative to: the centre of its scene, in world
+    /// coordinates.
+    pub fn origin(&self) -> [f64; 3] {
+        self.center
     }
 
     /// The stored direction for ray direction `d` and the sign (+1 or −1) that makes the beam
@@ -120,14 +172,15 @@ impl<'a> FieldView<'a> {
         best
     }
 
-    /// Steps 1 and 2: direction, canonical frame, sphere clip.
+    /// Steps 1 and 2 for a ray whose origin is given relative to `origin` (the world's origin for
+    /// world rays: the ray is moved to the centre here).
     #[inline]
-    fn setup(&self, ray: &Ray) -> Option<Setup> {
+    fn setup(&self, ray: &Ray, origin: [f64; 3]) -> Option<Setup> {
         if !ray.is_valid() {
             return None;
         }
         let d = ray.dir.map(f64::from);
-        let oc: [f64; 3] = std::array::from_fn(|i| ray.org[i] as f64 - self.center[i]);
+        let oc: [f64; 3] = std::array::from_fn(|i| ray.org[i] as f64 - origin[i]);
         // Clip to the bounding sphere grown by the margin, with the cancellation-free quadratic.
         let a = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
         let b = oc[0] * d[0] + oc[1] * d[1] + oc[2] * d[2];
@@ -138,8 +191,21 @@ impl<'a> FieldView<'a> {
         }
         let q = -(b + disc.sqrt().copysign(b));
         let (r0, r1) = if q == 0.0 { (0.0, 0.0) } else { (q / a, c / q) };
-        let t0 = r0.min(r1).max(ray.tmin as f64);
-        let t1 = r0.max(r1).min(ray.tmax as f64);
+        let mut t0 = r0.min(r1).max(ray.tmin as f64);
+        let mut t1 = r0.max(r1).min(ray.tmax as f64);
+        // Then to the scene's box: rays from outside start where the scene starts. (`max` and
+        // `min` ignore a NaN from `0 · ∞`, which leaves the interval as it was: conservative.)
+        for k in 0..3 {
+            if d[k] != 0.0 {
+                let inv = 1.0 / d[k];
+                let ta = (self.box_lo[k] - oc[k]) * inv;
+                let tb = (self.box_hi[k] - oc[k]) * inv;
+                t0 = t0.max(ta.min(tb));
+                t1 = t1.min(ta.max(tb));
+            } else if !(oc[k] >= self.box_lo[k] && oc[k] <= self.box_hi[k]) {
+                return None;
+            }
+        }
         if !(t0 <= t1) {
             return None;
         }
@@ -154,7 +220,8 @@ impl<'a> FieldView<'a> {
         Some(Setup { dir, o, d: dc, t0, t1 })
     }
 
-    /// The closest hit on `[tmin, tmax]`, or `None`: [`crate::Field::closest_hit`].
+    /// The closest hit on `[tmin, tmax]` of a ray in world coordinates, or `None`:
+    /// [`crate::Field::closest_hit`].
     #[inline]
     pub fn closest_hit(&self, ray: &Ray) -> Option<Hit> {
         self.closest_hit_counted(ray, &mut ())
@@ -163,17 +230,15 @@ impl<'a> FieldView<'a> {
     /// [`Self::closest_hit`], counting the work done in `counter` (rays, tiles, leaves and
     /// triangle tests; `()` counts nothing).
     pub fn closest_hit_counted(&self, ray: &Ray, counter: &mut impl Counter) -> Option<Hit> {
-        let setup = self.setup(ray)?;
-        counter.ray();
-        let tri_ray = TriRay::new(ray);
-        let tris = FieldTriangles(self.reader.triangles);
-        let mut best = Closest::new(ray.tmax);
-        self.walk(&setup, counter, |ids, exit_t, counter| {
-            tri_ray.closest_in(&tris, ids.iter().copied(), &mut best, counter);
-            // Final once the best hit lies within the part of the ray already searched.
-            if best.hit.is_some() && (best.tmax as f64) <= exit_t { Visit::Done } else { Visit::Continue }
-        });
-        best.hit
+        self.closest(ray, self.center, counter)
+    }
+
+    /// The closest hit of a ray whose origin is given relative to [`Self::origin`] (the
+    /// scene's centre): for scenes far from the world's origin, where an f32 world origin
+    /// cannot be precise. `t`, `u`, `v` and `prim` mean what they mean for world rays.
+    #[inline]
+    pub fn closest_hit_local(&self, ray: &Ray) -> Option<Hit> {
+        self.closest(ray, [0.0; 3], &mut ())
     }
 
     /// Whether anything is hit on `[tmin, tmax]`; the first hit found ends the search:
@@ -185,37 +250,67 @@ impl<'a> FieldView<'a> {
 
     /// The first hit found on `[tmin, tmax]` (not necessarily the closest), counting the work.
     pub fn any_hit_counted(&self, ray: &Ray, counter: &mut impl Counter) -> Option<Hit> {
-        let setup = self.setup(ray)?;
+        self.any(ray, self.center, counter)
+    }
+
+    /// [`Self::any_hit`] for a ray given relative to [`Self::origin`].
+    #[inline]
+    pub fn any_hit_local(&self, ray: &Ray) -> bool {
+        self.any(ray, [0.0; 3], &mut ()).is_some()
+    }
+
+    #[inline(always)]
+    fn closest(&self, ray: &Ray, origin: [f64; 3], counter: &mut impl Counter) -> Option<Hit> {
+        let setup = self.setup(ray, origin)?;
         counter.ray();
-        let tri_ray = TriRay::new(ray);
+        let tri_ray = TriRay::relative(ray, origin);
+        let tris = FieldTriangles(self.reader.triangles);
+        let mut best = Closest::new(ray.tmax);
+        self.walk(&setup, counter, |leaf, counter| {
+            let t_far = leaf.exit_t.min(best.tmax as f64);
+            tri_ray.closest_in(&tris, leaf.passing(t_far), &mut best, counter);
+            // Final once the best hit lies within the part of the ray already searched.
+            if best.hit.is_some() && (best.tmax as f64) <= leaf.exit_t { Visit::Done } else { Visit::Continue }
+        });
+        best.hit
+    }
+
+    #[inline(always)]
+    fn any(&self, ray: &Ray, origin: [f64; 3], counter: &mut impl Counter) -> Option<Hit> {
+        let setup = self.setup(ray, origin)?;
+        counter.ray();
+        let tri_ray = TriRay::relative(ray, origin);
         let tris = FieldTriangles(self.reader.triangles);
         let mut found = None;
-        self.walk(&setup, counter, |ids, _, counter| {
-            found = tri_ray.any_in(&tris, ids.iter().copied(), ray.tmax, counter);
+        self.walk(&setup, counter, |leaf, counter| {
+            found = tri_ray.any_in(&tris, leaf.passing(leaf.exit_t), ray.tmax, counter);
             if found.is_some() { Visit::Done } else { Visit::Continue }
         });
         found
     }
 
     /// The ray's candidate set (the paper's potentially visible set), leaf by leaf in ray order:
-    /// calls `visit(ids, exit_t)` with each visited leaf's triangle ids and the ray parameter at
-    /// which the ray leaves that leaf, until `visit` returns `true`. A triangle may appear in
-    /// several leaves. This is the walk [`Self::closest_hit`] does, without the triangle tests.
+    /// calls `visit(ids, exit_t)` with the triangle ids of each visited leaf (before the box test)
+    /// and the ray parameter at which the ray leaves that leaf, until `visit` returns `true`. A
+    /// triangle may appear in several leaves. This is the walk [`Self::closest_hit`] does, without
+    /// the box and triangle tests.
     pub fn for_each_leaf(&self, ray: &Ray, counter: &mut impl Counter, mut visit: impl FnMut(&[u32], f64) -> bool) {
-        if let Some(setup) = self.setup(ray) {
-            self.walk(&setup, counter, |ids, exit_t, _| if visit(ids, exit_t) { Visit::Done } else { Visit::Continue });
+        if let Some(setup) = self.setup(ray, self.center) {
+            self.walk(&setup, counter, |leaf, _| {
+                if visit(leaf.block.ids(leaf.refs), leaf.exit_t) { Visit::Done } else { Visit::Continue }
+            });
         }
     }
 
-    /// Steps 3 to 5: visits the leaves along the ray front to back, handing each leaf's ids and
-    /// the ray parameter at which the ray leaves that leaf to `visit`, until it says `Done`.
+    /// Steps 3 to 5: visits the leaves along the ray front to back, handing each to `visit` until
+    /// it says `Done`.
     #[inline(always)]
-    fn walk<C: Counter>(&self, s: &Setup, counter: &mut C, mut visit: impl FnMut(&[u32], f64, &mut C) -> Visit) {
+    fn walk<C: Counter>(&self, s: &Setup, counter: &mut C, mut visit: impl FnMut(&Leaf<'_, 'a>, &mut C) -> Visit) {
         let Some(beam) = self.reader.beams.get(s.dir) else { return };
         let n = self.n as i64;
         let (w, r) = (self.tile_width, self.radius);
-        // Tile coordinates of the entry point, clamped: the grown sphere pokes out of the square
-        // by at most the margin, where no triangle lies.
+        // Tile coordinates of the entry point, clamped: the grown scene pokes out of the grid by
+        // at most the margin, where no triangle lies.
         // (Truncation equals floor under the clamp to [0, n−1], without a libm call.)
         let cell = |v: f64| (((v + r) * self.inv_tile_width) as i64).clamp(0, n - 1);
         let mut ix = cell(s.o[0] + s.t0 * s.d[0]);
@@ -237,11 +332,15 @@ impl<'a> FieldView<'a> {
         // Each step moves one axis monotonically, so 2n + 1 visits cover any segment.
         for _ in 0..=2 * n {
             let t_exit = next_x.min(next_y).min(s.t1);
-            let index = tiles_of_dir + iy as usize * self.n + ix as usize;
-            if let Some(tile) = self.reader.tiles.get(index) {
-                counter.cell();
-                if let Visit::Done = self.visit_tile(tile, beam, s, t_enter, t_exit, counter, &mut visit) {
-                    return;
+            counter.cell();
+            if let Some(&entry) = self.reader.tiles.get(tiles_of_dir + iy as usize * self.n + ix as usize) {
+                if entry != EMPTY_TILE {
+                    if let Some(block) = self.block(beam, entry) {
+                        let corner = [-r + ix as f64 * w, -r + iy as f64 * w];
+                        if let Visit::Done = self.visit_tile(&block, corner, s, t_enter, t_exit, counter, &mut visit) {
+                            return;
+                        }
+                    }
                 }
             }
             if t_exit >= s.t1 {
@@ -262,71 +361,74 @@ impl<'a> FieldView<'a> {
         }
     }
 
-    /// Visits the leaves of one tile that the ray's parameter range `[t_enter, t_exit]` reaches.
+    /// The block of a tile whose TILES entry is `entry`, if the file's offsets are sane.
+    #[inline(always)]
+    fn block(&self, beam: &BeamRecord, entry: u32) -> Option<Block<'a>> {
+        let at = (beam.leaves_base as usize).checked_add(entry as usize)?;
+        Block::parse(self.reader.leaves.get(at..)?)
+    }
+
+    /// Visits the leaves of one tile (square at `corner`) that the ray's parameter range
+    /// `[t_enter, t_exit]` reaches, in ray order.
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
     fn visit_tile<C: Counter>(
         &self,
-        tile: &TileRecord,
-        beam: &BeamRecord,
+        block: &Block<'a>,
+        corner: [f64; 2],
         s: &Setup,
         t_enter: f64,
         t_exit: f64,
         counter: &mut C,
-        visit: &mut impl FnMut(&[u32], f64, &mut C) -> Visit,
+        visit: &mut impl FnMut(&Leaf<'_, 'a>, &mut C) -> Visit,
     ) -> Visit {
-        if tile.is_empty() || tile.depth as u32 > MAX_DEPTH {
-            return Visit::Continue;
-        }
-        let count = 1i64 << tile.depth;
-        // File-supplied bases: saturate, so an absurd value fails the bounds check instead of
-        // overflowing. An honest tile's leaves lie inside LEAF_BOUNDS (`formats/vlf.md` §5.6);
-        // skipping a tile that claims more keeps a lying depth from making the loop below
-        // iterate up to 2^24 times over leaves that do not exist.
-        let base = (beam.leaf_base as usize).saturating_add(tile.first_leaf as usize);
-        if base.saturating_add(count as usize) >= self.reader.leaf_bounds.len() {
-            return Visit::Continue;
-        }
-        let z0 = -self.radius + tile.z_lo as f64 * self.z_step;
-        let z1 = -self.radius + tile.z_hi as f64 * self.z_step;
-        let (oz, dz) = (s.o[2], s.d[2]);
-        // The parameter range over which the ray's beam coordinate is within [z0, z1].
-        let (ta, tb) = if dz > 0.0 { ((z0 - oz) / dz, (z1 - oz) / dz) } else { ((z1 - oz) / dz, (z0 - oz) / dz) };
+        let bounds = block.bounds();
+        let k = block.leaf_count();
+        // The beam coordinate in quantized levels: the ray's level at t is `oq + t · dq`.
+        let inv_step = 1.0 / self.z_step;
+        let (oq, dq) = ((s.o[2] + self.radius) * inv_step, s.d[2] * inv_step);
+        let inv_dq = 1.0 / dq;
+        let t_at = |level: u16| (level as f64 - oq) * inv_dq;
+        // The parameter range over which the ray is within the tile's z range.
+        let up = dq > 0.0;
+        let (ta, tb) = if up { (t_at(bounds[0]), t_at(bounds[k])) } else { (t_at(bounds[k]), t_at(bounds[0])) };
         let lo = t_enter.max(ta);
         let hi = t_exit.min(tb);
         if !(lo <= hi) {
             return Visit::Continue;
         }
-        let h = (z1 - z0) / count as f64;
-        let leaf_of = |t: f64| (((oz + t * dz - z0) / h) as i64).clamp(0, count - 1);
-        let (first, last) = (leaf_of(lo), leaf_of(hi));
-        let step = if dz > 0.0 { 1 } else { -1 };
-        let mut k = first;
+        // The leaf holding the entry point: the leaves partition [bounds[0], bounds[K]] in order.
+        // Going up, the first leaf whose top is not below it; going down, the last whose bottom
+        // is not above it.
+        let q_in = oq + lo * dq;
+        let inner = &bounds[1..k];
+        let mut leaf = if up {
+            inner.partition_point(|&b| (b as f64) < q_in)
+        } else {
+            inner.partition_point(|&b| (b as f64) <= q_in)
+        };
+        let (o, d) = ([s.o[0] - corner[0], s.o[1] - corner[1]], [s.d[0], s.d[1]]);
+        let mut leaf_enter = lo;
         loop {
-            let leaf_exit = if k == last {
-                hi
-            } else {
-                let boundary = z0 + (if dz > 0.0 { k + 1 } else { k }) as f64 * h;
-                ((boundary - oz) / dz).min(hi)
-            };
+            let last = if up { leaf + 1 == k } else { leaf == 0 };
+            let exit_t = if last { hi } else { t_at(bounds[if up { leaf + 1 } else { leaf }]).min(hi) };
             counter.leaf();
-            if let Some(ids) = self.leaf_ids(beam, base.saturating_add(k as usize)) {
-                if let Visit::Done = visit(ids, leaf_exit, counter) {
+            if let Some(refs) = block.leaf(leaf).filter(|r| !r.is_empty()) {
+                let (cells_per_unit, margin) = (self.cells_per_unit, self.margin);
+                let l = Leaf { block, refs, enter_t: leaf_enter, exit_t, o, d, cells_per_unit, margin };
+                if let Visit::Done = visit(&l, counter) {
                     return Visit::Done;
                 }
             }
-            if k == last {
+            if last || exit_t >= hi {
                 return Visit::Continue;
             }
-            k += step;
+            leaf_enter = exit_t;
+            if up {
+                leaf += 1;
+            } else {
+                leaf -= 1;
+            }
         }
-    }
-
-    /// The ids of leaf `leaf` (an index into LEAF_BOUNDS), if the file's bounds are sane.
-    #[inline(always)]
-    fn leaf_ids(&self, beam: &BeamRecord, leaf: usize) -> Option<&'a [u32]> {
-        let b = self.reader.leaf_bounds.get(leaf..leaf.checked_add(2)?)?;
-        let base = beam.id_base as usize;
-        self.reader.triangle_ids.get(base.checked_add(b[0] as usize)?..base.checked_add(b[1] as usize)?)
     }
 }

@@ -529,7 +529,7 @@ fn import_primitive(
     }
 
     let reader = primitive.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
-    let positions: Vec<[f32; 3]> = if position.count() == 0 {
+    let positions: Vec<[f64; 3]> = if position.count() == 0 {
         Vec::new()
     } else {
         let read = reader.read_positions().ok_or_else(|| ctx.err(format!("{location}: cannot read POSITION")))?;

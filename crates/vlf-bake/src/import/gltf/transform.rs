@@ -42,13 +42,13 @@ pub(super) fn mul(a: &Mat4, b: &Mat4) -> Mat4 {
     std::array::from_fn(|column| std::array::from_fn(|row| (0..4).map(|k| a[k][row] * b[column][k]).sum()))
 }
 
-/// The affine image of `p` under `m`, computed in f64 and rounded to f32. A point with a
-/// non-finite coordinate is returned as it is, so that the error names the value in the file (a
-/// NaN would otherwise spread to every coordinate).
-pub(super) fn transform_point(m: &Mat4, p: [f32; 3]) -> [f32; 3] {
-    if !p.iter().all(|c| c.is_finite()) {
-        return p;
-    }
+/// The affine image of `p` under `m`, in f64 (the scene keeps world coordinates in f64 until it
+/// knows its centre). A point with a non-finite coordinate is returned as it is, so that the
+/// error names the value in the file (a NaN would otherwise spread to every coordinate).
+pub(super) fn transform_point(m: &Mat4, p: [f32; 3]) -> [f64; 3] {
     let [x, y, z] = p.map(f64::from);
-    std::array::from_fn(|row| (m[0][row] * x + m[1][row] * y + m[2][row] * z + m[3][row]) as f32)
+    if !p.iter().all(|c| c.is_finite()) {
+        return [x, y, z];
+    }
+    std::array::from_fn(|row| m[0][row] * x + m[1][row] * y + m[2][row] * z + m[3][row])
 }

@@ -1,0 +1,183 @@
+//! The ref filter: which refs of a leaf have a box that the ray's box meets
+//! (`formats/vlf.md` §5.6). A leaf's refs are tested sixteen at a time against the ray's box, from
+//! the block's four arrays of quantized box bounds, without touching the triangles; only the refs
+//! that pass go on to the triangle test.
+//!
+//! A ref passes when `x_lo ≤ rx_hi`, `x_hi ≥ rx_lo`, `y_lo ≤ ry_hi` and `y_hi ≥ ry_lo`. The block
+//! stores `255 − x_hi` and `255 − y_hi`, so all four tests read "stored ≤ limit", that is
+//! `stored −sat limit = 0`: one saturating subtraction per array and a compare with zero, which
+//! SSE2 (part of every x86-64) does for sixteen refs at once. [`pass_mask_scalar`] is the plain
+//! twin the tests hold it to, and what other targets use.
+
+use vlf_format::block::{Block, LeafRefs};
+
+/// The limits a ref's stored box bytes must not exceed: `[rx_hi, 255 − rx_lo, ry_hi, 255 − ry_lo]`.
+pub(crate) type Limits = [u8; 4];
+
+/// The limits for a ray box covering the cells `x_lo..=x_hi`, `y_lo..=y_hi`.
+#[inline(always)]
+pub(crate) fn limits(x_lo: u8, x_hi: u8, y_lo: u8, y_hi: u8) -> Limits {
+    [x_hi, 255 - x_lo, y_hi, 255 - y_lo]
+}
+
+/// Bit `i` set if ref `i` of the sixteen in `lanes` (one array per box bound) passes: the plain
+/// twin of [`pass_mask`].
+#[cfg(any(test, not(target_arch = "x86_64")))]
+#[inline(always)]
+pub(crate) fn pass_mask_scalar(lanes: &[[u8; 16]; 4], limits: Limits) -> u32 {
+    (0..16).filter(|&i| lanes.iter().zip(limits).all(|(lane, limit)| lane[i] <= limit)).fold(0, |mask, i| mask | 1 << i)
+}
+
+/// [`pass_mask_scalar`], sixteen refs per instruction.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+pub(crate) fn pass_mask(lanes: &[[u8; 16]; 4], limits: Limits) -> u32 {
+    use std::arch::x86_64::*;
+    // SAFETY: these intrinsics need SSE2, which every x86-64 CPU has (it is in the target's
+    // baseline features); they read and write only their register arguments.
+    unsafe {
+        let over = |a: usize| {
+            let lane: __m128i = bytemuck::cast(lanes[a]);
+            _mm_subs_epu8(lane, _mm_set1_epi8(limits[a] as i8))
+        };
+        let any_over = _mm_or_si128(_mm_or_si128(over(0), over(1)), _mm_or_si128(over(2), over(3)));
+        _mm_movemask_epi8(_mm_cmpeq_epi8(any_over, _mm_setzero_si128())) as u32
+    }
+}
+
+/// [`pass_mask_scalar`] on targets without a vector twin.
+#[cfg(not(target_arch = "x86_64"))]
+#[inline(always)]
+pub(crate) fn pass_mask(lanes: &[[u8; 16]; 4], limits: Limits) -> u32 {
+    pass_mask_scalar(lanes, limits)
+}
+
+/// The triangle ids of the refs of a leaf of a block whose boxes pass `limits`, in ref order.
+pub(crate) struct Passing<'a> {
+    /// The leaf's bytes from its first box array on ([`Block::leaf_bytes`]).
+    bytes: &'a [u8],
+    len: usize,
+    ids: &'a [u32],
+    limits: Limits,
+    /// First ref of the current group of sixteen.
+    group: usize,
+    /// The refs of the current group that passed and are not yet returned.
+    mask: u32,
+}
+
+impl<'a> Passing<'a> {
+    #[inline(always)]
+    pub(crate) fn new(block: &Block<'a>, leaf: LeafRefs, limits: Limits) -> Self {
+        let (bytes, ids) = (block.leaf_bytes(leaf), block.ids(leaf));
+        let mut p = Passing { bytes, len: leaf.len, ids, limits, group: 0, mask: 0 };
+        p.fill();
+        p
+    }
+
+    /// Sixteen bytes of box array `a` from the current group on, 255 past the section's end.
+    #[inline(always)]
+    fn lane(&self, a: usize) -> [u8; 16] {
+        let at = a * self.len + self.group;
+        match self.bytes.get(at..at + 16) {
+            Some(lane) => lane.try_into().expect("16 bytes"),
+            None => {
+                let mut lane = [255u8; 16];
+                let tail = self.bytes.get(at..).unwrap_or(&[]);
+                lane[..tail.len()].copy_from_slice(tail);
+                lane
+            }
+        }
+    }
+
+    /// Moves to the first group with a passing ref, or to the end.
+    #[inline(always)]
+    fn fill(&mut self) {
+        while self.group < self.len {
+            let lanes = [self.lane(0), self.lane(1), self.lane(2), self.lane(3)];
+            let left = self.len - self.group;
+            let valid = if left >= 16 { 0xffff } else { (1u32 << left) - 1 };
+            self.mask = pass_mask(&lanes, self.limits) & valid;
+            if self.mask != 0 {
+                return;
+            }
+            self.group += 16;
+        }
+    }
+}
+
+impl Iterator for Passing<'_> {
+    type Item = u32;
+
+    #[inline(always)]
+    fn next(&mut self) -> Option<u32> {
+        if self.mask == 0 {
+            return None;
+        }
+        let i = self.group + self.mask.trailing_zeros() as usize;
+        self.mask &= self.mask - 1;
+        if self.mask == 0 {
+            self.group += 16;
+            self.fill();
+        }
+        self.ids.get(i).copied()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use vlf_format::block::{Ref, write_block};
+
+    /// A small deterministic generator (xorshift), so the test needs no dependency.
+    fn rng(seed: u64) -> impl FnMut() -> u64 {
+        let mut s = seed | 1;
+        move || {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            s
+        }
+    }
+
+    #[test]
+    fn the_vector_mask_is_the_scalar_mask() {
+        let mut next = rng(7);
+        for _ in 0..100_000 {
+            let lanes: [[u8; 16]; 4] = std::array::from_fn(|_| std::array::from_fn(|_| next() as u8));
+            let l = next().to_le_bytes();
+            let limits = [l[0], l[1], l[2], l[3]];
+            assert_eq!(pass_mask(&lanes, limits), pass_mask_scalar(&lanes, limits));
+        }
+    }
+
+    #[test]
+    fn passing_refs_are_those_whose_boxes_meet_the_ray_box() {
+        let mut next = rng(11);
+        for round in 0..500 {
+            let m = (next() % 70) as usize;
+            let refs: Vec<Ref> = (0..m)
+                .map(|i| {
+                    let (a, b, c, d) = (next() as u8, next() as u8, next() as u8, next() as u8);
+                    Ref { id: i as u32 * 3 + round, x: [a.min(b), a.max(b)], y: [c.min(d), c.max(d)] }
+                })
+                .collect();
+            let split = if m == 0 { 0 } else { (next() as usize) % (m + 1) };
+            let mut words = vec![];
+            write_block(&[0, 100, 200], &[&refs[..split], &refs[split..]], &mut words);
+            let block = Block::parse(&words).unwrap();
+            let (a, b, c, d) = (next() as u8, next() as u8, next() as u8, next() as u8);
+            let (x, y) = ([a.min(b), a.max(b)], [c.min(d), c.max(d)]);
+            for (k, range) in [(0, 0..split), (1, split..m)] {
+                let leaf = block.leaf(k).unwrap();
+                assert_eq!(leaf.len, range.len());
+                let got: Vec<u32> = Passing::new(&block, leaf, limits(x[0], x[1], y[0], y[1])).collect();
+                let want: Vec<u32> = refs[range]
+                    .iter()
+                    .filter(|r| r.x[0] <= x[1] && r.x[1] >= x[0] && r.y[0] <= y[1] && r.y[1] >= y[0])
+                    .map(|r| r.id)
+                    .collect();
+                assert_eq!(got, want);
+            }
+        }
+    }
+}
