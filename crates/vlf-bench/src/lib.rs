@@ -12,6 +12,8 @@
 //!   and the BSP policy for the 100K scene.
 //! - [`first_pixel`]: time to first pixel (open a field and trace one ray, in a new process) for
 //!   fields of any size, with the file in the page cache and evicted from it.
+//! - [`peers`]: the field against Embree, obvhs and the kd-tree on the same scenes and rays
+//!   (issue 12), every contestant's hits checked against the brute force.
 //!
 //! Frames are traced on one thread (the paper used one processor); every timing is the median of
 //! `repeats` runs after a warm-up run. Bakes use all cores.
@@ -22,6 +24,7 @@
 pub mod experiments;
 #[allow(unsafe_code)]
 pub mod first_pixel;
+pub mod peers;
 pub mod plot;
 
 use std::hint::black_box;

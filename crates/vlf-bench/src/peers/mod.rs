@@ -1,0 +1,403 @@
+//! `vlf-bench peers`: the visibility field against Embree 3 (`embree` feature), obvhs's CWBVH
+//! (`obvhs` feature) and the paper's kd-tree, on the same scenes and the same rays, in one
+//! process; every contestant's hits checked against the brute force; Mrays/s at each thread
+//! count, build times and sizes, written as `peers.md`, `peers.json` and SVG plots.
+//!
+//! The flow per scene: load the triangles ([`scenes`]); bake the field at its default automatic
+//! parameters and open it; make the ray sets ([`rays`]; the shadow rays start from the field's
+//! primary hits); build the other contestants; check a sample of every set against the brute
+//! force ([`check`]); time every contestant on every set at each thread count ([`time_set`]);
+//! with `--sweep`, bake the field again at explicit parameters and time it ([`sweep`]). The report
+//! ([`report`]) is rewritten after every scene, so a long run leaves its finished scenes behind.
+
+pub mod check;
+pub mod contestant;
+#[cfg(feature = "embree")]
+pub mod embree;
+#[cfg(feature = "obvhs")]
+pub mod obvhs;
+pub mod rays;
+pub mod report;
+pub mod scenes;
+
+use crate::median;
+use contestant::{Contestant, FieldContestant, KdChoice, KdContestant, PeerHit};
+use rayon::prelude::*;
+use rays::RaySet;
+use scenes::{LoadedScene, SceneSpec};
+use std::hint::black_box;
+use std::path::PathBuf;
+use std::time::Instant;
+use vlf_bake::BakeConfig;
+use vlf_geom::{Camera, Ray};
+
+/// A triangle as every contestant takes it.
+pub type Tri = [[f32; 3]; 3];
+
+/// What a ray set asks.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub enum Query {
+    /// Closest hit (`rtcIntersect1`).
+    Closest,
+    /// Any hit (`rtcOccluded1`).
+    Any,
+}
+
+/// Everything a run needs.
+#[derive(Clone, Debug)]
+pub struct PeersConfig {
+    pub scenes: Vec<SceneSpec>,
+    /// Where fields are baked (deleted after use unless `keep_fields`).
+    pub work: PathBuf,
+    /// Where `peers.md`, `peers.json` and the plots go.
+    pub out: PathBuf,
+    /// Primary images are `resolution²` rays.
+    pub resolution: u32,
+    /// Incoherent rays per scene.
+    pub incoherent: usize,
+    /// Timed runs per measurement, after a warm-up run.
+    pub repeats: usize,
+    /// Thread counts to time at (a rayon pool of each size).
+    pub threads: Vec<usize>,
+    /// Rays sampled per set for the brute-force check of scenes with more than `check_all_below`
+    /// triangles; smaller scenes are checked on every ray.
+    pub check_rays: usize,
+    pub check_all_below: usize,
+    /// Relative `t` difference counted as rounding for contestants with another triangle test.
+    pub t_tolerance: f64,
+    pub kd: KdChoice,
+    /// Explicit (directions, tiles) settings for the size sweep; empty: no sweep.
+    pub sweep: Vec<(u32, u32)>,
+    pub keep_fields: bool,
+    /// The command line, as the report shows it.
+    pub command: String,
+    /// Print progress lines.
+    pub verbose: bool,
+    /// A quick run: said in the report's title.
+    pub quick: bool,
+}
+
+/// Rays per parallel work item.
+const CHUNK: usize = 1024;
+/// The seed of the incoherent rays and of the checked samples.
+const SEED: u64 = 12;
+
+/// One timed measurement.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+pub struct Speed {
+    pub contestant: String,
+    pub threads: usize,
+    pub median_s: f64,
+    pub runs_s: Vec<f64>,
+    pub mrays_per_s: f64,
+    /// The 1-minute load average when the measurement started.
+    pub load: f64,
+}
+
+/// One ray set of one scene.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+pub struct SetResult {
+    pub name: String,
+    pub query: Query,
+    pub rays: usize,
+    /// The rays hit (closest) or blocked (any), by the field.
+    pub hits: usize,
+    pub speeds: Vec<Speed>,
+    pub checks: Vec<check::Counts>,
+}
+
+impl SetResult {
+    /// Mrays/s of `contestant` at `threads`.
+    pub fn mrays(&self, contestant: &str, threads: usize) -> Option<f64> {
+        self.speeds.iter().find(|s| s.contestant == contestant && s.threads == threads).map(|s| s.mrays_per_s)
+    }
+}
+
+/// A contestant's build.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+pub struct Built {
+    pub contestant: String,
+    pub params: String,
+    pub build_s: f64,
+    pub bytes: u64,
+    pub bytes_per_triangle: f64,
+}
+
+/// The field's own figures.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+pub struct FieldInfo {
+    pub directions: u32,
+    pub tiles: u32,
+    pub bake_s: f64,
+    pub open_ms: f64,
+    pub bytes: u64,
+    pub bytes_per_triangle: f64,
+    pub choice: String,
+}
+
+/// The field at one explicit setting of the sweep.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+pub struct SweepPoint {
+    pub field: FieldInfo,
+    /// (set, threads, Mrays/s).
+    pub speeds: Vec<(String, usize, f64)>,
+}
+
+/// Everything measured on one scene.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+pub struct SceneResult {
+    pub name: String,
+    pub description: String,
+    pub triangles: usize,
+    pub field: FieldInfo,
+    pub built: Vec<Built>,
+    pub sets: Vec<SetResult>,
+    pub sweep: Vec<SweepPoint>,
+    /// Settings the sweep could not bake, and why.
+    pub sweep_skipped: Vec<String>,
+    pub light: [f64; 3],
+    pub seconds: f64,
+}
+
+/// The load average over the last minute.
+pub fn load_average() -> f64 {
+    std::fs::read_to_string("/proc/loadavg")
+        .ok()
+        .and_then(|s| s.split_whitespace().next().and_then(|v| v.parse().ok()))
+        .unwrap_or(f64::NAN)
+}
+
+fn note(verbose: bool, msg: impl std::fmt::Display) {
+    if verbose {
+        eprintln!("peers: {msg}");
+    }
+}
+
+fn field_info(f: &FieldContestant, triangles: usize) -> FieldInfo {
+    FieldInfo {
+        directions: f.directions,
+        tiles: f.tiles,
+        bake_s: f.bake_seconds,
+        open_ms: f.open_seconds * 1e3,
+        bytes: f.file_bytes,
+        bytes_per_triangle: f.file_bytes as f64 / triangles.max(1) as f64,
+        choice: f.choice.clone(),
+    }
+}
+
+/// Times `c` on `set` in `pool`: one warm-up run, then `repeats` timed runs; rays are split into
+/// chunks of [`CHUNK`] that the pool's threads take in turn, one query per ray.
+pub fn time_set(c: &dyn Contestant, set: &RaySet, pool: &rayon::ThreadPool, repeats: usize) -> (f64, Vec<f64>) {
+    let mut closest: Vec<Option<PeerHit>> = vec![None; set.rays.len()];
+    let mut any = vec![false; set.rays.len()];
+    let mut once = || {
+        let start = Instant::now();
+        pool.install(|| match set.query {
+            Query::Closest => set
+                .rays
+                .par_chunks(CHUNK)
+                .zip(closest.par_chunks_mut(CHUNK))
+                .for_each(|(r, o)| c.closest_hits(black_box(r), o)),
+            Query::Any => {
+                set.rays.par_chunks(CHUNK).zip(any.par_chunks_mut(CHUNK)).for_each(|(r, o)| c.any_hits(black_box(r), o))
+            }
+        });
+        let s = start.elapsed().as_secs_f64();
+        black_box((&closest, &any));
+        s
+    };
+    once();
+    let runs: Vec<f64> = (0..repeats.max(1)).map(|_| once()).collect();
+    let mut sorted = runs.clone();
+    (median(&mut sorted), runs)
+}
+
+fn pools(threads: &[usize]) -> anyhow::Result<Vec<(usize, rayon::ThreadPool)>> {
+    threads.iter().map(|&n| Ok((n, rayon::ThreadPoolBuilder::new().num_threads(n).build()?))).collect()
+}
+
+/// The contestants other than the field, in table order.
+fn build_peers(
+    tris: &[Tri],
+    cfg: &PeersConfig,
+    center: [f64; 3],
+    radius: f64,
+) -> anyhow::Result<Vec<Box<dyn Contestant>>> {
+    let mut v: Vec<Box<dyn Contestant>> = Vec::new();
+    #[cfg(feature = "embree")]
+    {
+        note(cfg.verbose, "building Embree");
+        v.push(Box::new(embree::EmbreeContestant::build(tris)?));
+    }
+    #[cfg(feature = "obvhs")]
+    {
+        note(cfg.verbose, "building obvhs");
+        v.push(Box::new(obvhs::ObvhsContestant::build(tris)));
+    }
+    note(cfg.verbose, format!("building the kd-tree ({:?})", cfg.kd));
+    let probe: Vec<Ray> = [Camera::outside(center, radius, 1.0), Camera::inside(center, radius, 1.0)]
+        .iter()
+        .flat_map(|c| c.primary_rays(128, 128))
+        .collect();
+    v.push(Box::new(KdContestant::build(tris, cfg.kd, &probe)));
+    Ok(v)
+}
+
+/// The ray sets of a scene; the shadow sets start from `field`'s primary hits.
+fn ray_sets(scene: &LoadedScene, field: &FieldContestant, cfg: &PeersConfig) -> (Vec<RaySet>, [f64; 3]) {
+    let (center, radius) = field.field.bounding_sphere();
+    let light = rays::light(center, radius);
+    let [outside, inside] = rays::primary(center, radius, cfg.resolution);
+    let incoherent = rays::incoherent(&scene.triangles, cfg.incoherent, SEED);
+    let hits = |set: &RaySet| -> Vec<Option<f32>> {
+        set.rays.par_iter().with_min_len(256).map(|r| field.closest_hit(r).map(|h| h.t)).collect()
+    };
+    let shadow_outside = rays::shadow("shadow-outside", &outside.rays, &hits(&outside), light);
+    let shadow_inside = rays::shadow("shadow-inside", &inside.rays, &hits(&inside), light);
+    (vec![outside, inside, incoherent, shadow_outside, shadow_inside], light)
+}
+
+/// Runs one scene.
+pub fn run_scene(spec: &SceneSpec, cfg: &PeersConfig) -> anyhow::Result<SceneResult> {
+    let start = Instant::now();
+    let scene = spec.load()?;
+    let n = scene.triangles.len();
+    note(cfg.verbose, format!("{}: {}", scene.name, scene.description));
+    note(cfg.verbose, format!("{}: baking the field (default parameters)", scene.name));
+    let mut field = FieldContestant::bake(&scene.triangles, &BakeConfig::default(), &cfg.work, &scene.name)?;
+    field.keep = cfg.keep_fields;
+    let info = field_info(&field, n);
+    note(
+        cfg.verbose,
+        format!(
+            "{}: {} in {:.1} s, {:.0} B/triangle",
+            scene.name,
+            field.describe(),
+            info.bake_s,
+            info.bytes_per_triangle
+        ),
+    );
+    let (center, radius) = field.field.bounding_sphere();
+    let (sets, light) = ray_sets(&scene, &field, cfg);
+    let peers = build_peers(&scene.triangles, cfg, center, radius)?;
+    let mut all: Vec<&dyn Contestant> = vec![&field];
+    all.extend(peers.iter().map(|b| b.as_ref()));
+    let built = all
+        .iter()
+        .map(|c| Built {
+            contestant: c.name().into(),
+            params: c.describe(),
+            build_s: c.build_seconds(),
+            bytes: c.bytes(),
+            bytes_per_triangle: c.bytes() as f64 / n.max(1) as f64,
+        })
+        .collect();
+
+    let pools = pools(&cfg.threads)?;
+    let mut results = Vec::new();
+    for (k, set) in sets.iter().enumerate() {
+        let sample = if n < cfg.check_all_below { set.rays.len() } else { cfg.check_rays };
+        note(
+            cfg.verbose,
+            format!(
+                "{} / {}: brute force on {} of {} rays",
+                scene.name,
+                set.name,
+                sample.min(set.rays.len()),
+                set.rays.len()
+            ),
+        );
+        let checked =
+            check::Checked::new(&scene.triangles, set, &rays::sample(set.rays.len(), sample, SEED + k as u64));
+        let checks: Vec<check::Counts> = all.iter().map(|c| checked.compare(*c, cfg.t_tolerance)).collect();
+        let mut speeds = Vec::new();
+        for (threads, pool) in &pools {
+            for c in &all {
+                let load = load_average();
+                let (median_s, runs_s) = time_set(*c, set, pool, cfg.repeats);
+                let mrays_per_s = set.rays.len() as f64 / median_s / 1e6;
+                note(
+                    cfg.verbose,
+                    format!("{} / {} / {} / {threads}T: {mrays_per_s:.3} Mrays/s", scene.name, set.name, c.name()),
+                );
+                speeds.push(Speed {
+                    contestant: c.name().into(),
+                    threads: *threads,
+                    median_s,
+                    runs_s,
+                    mrays_per_s,
+                    load,
+                });
+            }
+        }
+        let hits = match set.query {
+            Query::Closest => set.rays.par_iter().filter(|r| field.closest_hit(r).is_some()).count(),
+            Query::Any => set.rays.par_iter().filter(|r| field.any_hit(r)).count(),
+        };
+        results.push(SetResult { name: set.name.into(), query: set.query, rays: set.rays.len(), hits, speeds, checks });
+    }
+    drop(peers);
+    drop(field);
+
+    let mut sweep = Vec::new();
+    let mut sweep_skipped = Vec::new();
+    for &(directions, tiles) in &cfg.sweep {
+        let config = BakeConfig { directions: Some(directions), tiles: Some(tiles), ..BakeConfig::default() };
+        note(cfg.verbose, format!("{}: sweep: baking {directions} directions × {tiles}²", scene.name));
+        let name = format!("{}-sweep-{directions}x{tiles}", scene.name);
+        let f = match FieldContestant::bake(&scene.triangles, &config, &cfg.work, &name) {
+            Ok(f) => f,
+            Err(e) => {
+                sweep_skipped.push(format!("{directions} directions × {tiles}²: {e:#}"));
+                continue;
+            }
+        };
+        let mut speeds = Vec::new();
+        for set in &sets {
+            for (threads, pool) in &pools {
+                let (median_s, _) = time_set(&f, set, pool, cfg.repeats);
+                speeds.push((set.name.to_string(), *threads, set.rays.len() as f64 / median_s / 1e6));
+            }
+        }
+        sweep.push(SweepPoint { field: field_info(&f, n), speeds });
+    }
+    Ok(SceneResult {
+        name: scene.name,
+        description: scene.description,
+        triangles: n,
+        field: info,
+        built,
+        sets: results,
+        sweep,
+        sweep_skipped,
+        light,
+        seconds: start.elapsed().as_secs_f64(),
+    })
+}
+
+/// Runs every scene, rewriting the report after each; fails if the field disagreed with the
+/// brute force anywhere (after writing the report that shows where).
+pub fn run(cfg: &PeersConfig) -> anyhow::Result<report::Report> {
+    let mut report = report::Report::new(cfg);
+    let start = Instant::now();
+    for spec in &cfg.scenes {
+        let scene = run_scene(spec, cfg)?;
+        report.scenes.push(scene);
+        report.total_seconds = start.elapsed().as_secs_f64();
+        report.load_after = load_average();
+        report.write(&cfg.out)?;
+    }
+    let bad: Vec<String> = report
+        .scenes
+        .iter()
+        .flat_map(|s| {
+            s.sets.iter().flat_map(move |set| {
+                set.checks.iter().filter(|c| c.contestant == "field" && c.inexact() > 0).map(move |c| {
+                    format!("{} / {}: {} of {} rays differ from the brute force", s.name, set.name, c.inexact(), c.rays)
+                })
+            })
+        })
+        .collect();
+    anyhow::ensure!(bad.is_empty(), "the field disagrees with the brute force:\n{}", bad.join("\n"));
+    Ok(report)
+}
