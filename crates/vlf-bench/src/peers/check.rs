@@ -20,9 +20,10 @@ pub struct Checked {
 }
 
 impl Checked {
-    /// Traces `indices` of `set` by brute force over `tris` (all cores).
-    pub fn new(tris: &[Tri], set: &RaySet, indices: &[usize]) -> Checked {
-        let bf = BruteForce { triangles: tris };
+    /// Traces `indices` of `set` by brute force over `tris`, stored relative to `origin` as the
+    /// field stores them (all cores).
+    pub fn new(tris: &[Tri], origin: [f64; 3], set: &RaySet, indices: &[usize]) -> Checked {
+        let bf = BruteForce::relative(tris, origin);
         let rays: Vec<Ray> = indices.iter().map(|&i| set.rays[i]).collect();
         let reference = match set.query {
             Query::Closest => Reference::Closest(

@@ -4,7 +4,6 @@
 
 use super::Tri;
 use crate::experiments::tune_kd;
-use anyhow::Context as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 use vlf_bake::{BakeConfig, NoProgress, Prepared, Scene};
@@ -65,24 +64,23 @@ pub struct FieldContestant {
 }
 
 impl FieldContestant {
-    /// Bakes `tris` with `config` (all cores) and opens the result.
-    pub fn bake(tris: &[Tri], config: &BakeConfig, work: &Path, name: &str) -> anyhow::Result<FieldContestant> {
+    /// Bakes `scene` with `config` (all cores) and opens the result.
+    pub fn bake(scene: &Scene, config: &BakeConfig, work: &Path, name: &str) -> anyhow::Result<FieldContestant> {
         std::fs::create_dir_all(work)?;
         let path = work.join(format!("{name}.vlf"));
-        let scene = Scene::from_triangles(name, tris).context("scene")?;
         let start = Instant::now();
-        let prep = Prepared::new(&scene);
+        let prep = Prepared::new(scene);
         let choice = vlf_bake::choose(&prep, config)?;
-        let summary = vlf_bake::bake::bake_to_path(&prep, &choice, &config.request(), &path, &NoProgress)?;
+        let summary = vlf_bake::writer::write_field(&prep, &choice, &config.request(), &path, &NoProgress)?;
         let bake_seconds = start.elapsed().as_secs_f64();
         let start = Instant::now();
         let field = Field::open(&path)?;
         let open_seconds = start.elapsed().as_secs_f64();
         anyhow::ensure!(
-            field.triangle_count() as usize == tris.len(),
-            "the field of {name} holds {} triangles, the scene {}: a degenerate triangle was dropped",
+            field.triangle_count() as usize == scene.len(),
+            "the field of {name} holds {} triangles, the scene {}",
             field.triangle_count(),
-            tris.len()
+            scene.len()
         );
         Ok(FieldContestant {
             field,

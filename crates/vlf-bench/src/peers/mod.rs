@@ -13,6 +13,7 @@
 pub mod check;
 pub mod contestant;
 #[cfg(feature = "embree")]
+#[allow(unsafe_code)] // The FFI to Embree's C shim: every unsafe block says why it is sound.
 pub mod embree;
 #[cfg(feature = "obvhs")]
 pub mod obvhs;
@@ -21,6 +22,7 @@ pub mod report;
 pub mod scenes;
 
 use crate::median;
+use anyhow::Context as _;
 use contestant::{Contestant, FieldContestant, KdChoice, KdContestant, PeerHit};
 use rayon::prelude::*;
 use rays::RaySet;
@@ -260,11 +262,17 @@ fn ray_sets(scene: &LoadedScene, field: &FieldContestant, cfg: &PeersConfig) -> 
 /// Runs one scene.
 pub fn run_scene(spec: &SceneSpec, cfg: &PeersConfig) -> anyhow::Result<SceneResult> {
     let start = Instant::now();
-    let scene = spec.load()?;
+    let mut scene = spec.load()?;
+    // The scene as the field stores it (degenerate triangles dropped, duplicates merged, relative
+    // to its centre): every contestant gets its triangles, in world coordinates, so that triangle
+    // ids agree; the brute force checks on the stored ones, with the field's own arithmetic.
+    let baked = vlf_bake::Scene::from_triangles(&scene.name, &scene.triangles).context("scene")?;
+    scene.triangles = baked.world_vertices().iter().map(|t| t.map(|v| v.map(|c| c as f32))).collect();
+    let stored = baked.vertices();
     let n = scene.triangles.len();
     note(cfg.verbose, format!("{}: {}", scene.name, scene.description));
     note(cfg.verbose, format!("{}: baking the field (default parameters)", scene.name));
-    let mut field = FieldContestant::bake(&scene.triangles, &BakeConfig::default(), &cfg.work, &scene.name)?;
+    let mut field = FieldContestant::bake(&baked, &BakeConfig::default(), &cfg.work, &scene.name)?;
     field.keep = cfg.keep_fields;
     let info = field_info(&field, n);
     note(
@@ -308,7 +316,7 @@ pub fn run_scene(spec: &SceneSpec, cfg: &PeersConfig) -> anyhow::Result<SceneRes
             ),
         );
         let checked =
-            check::Checked::new(&scene.triangles, set, &rays::sample(set.rays.len(), sample, SEED + k as u64));
+            check::Checked::new(&stored, baked.center, set, &rays::sample(set.rays.len(), sample, SEED + k as u64));
         let checks: Vec<check::Counts> = all.iter().map(|c| checked.compare(*c, cfg.t_tolerance)).collect();
         let mut speeds = Vec::new();
         for (threads, pool) in &pools {
@@ -345,7 +353,7 @@ pub fn run_scene(spec: &SceneSpec, cfg: &PeersConfig) -> anyhow::Result<SceneRes
         let config = BakeConfig { directions: Some(directions), tiles: Some(tiles), ..BakeConfig::default() };
         note(cfg.verbose, format!("{}: sweep: baking {directions} directions × {tiles}²", scene.name));
         let name = format!("{}-sweep-{directions}x{tiles}", scene.name);
-        let f = match FieldContestant::bake(&scene.triangles, &config, &cfg.work, &name) {
+        let f = match FieldContestant::bake(&baked, &config, &cfg.work, &name) {
             Ok(f) => f,
             Err(e) => {
                 sweep_skipped.push(format!("{directions} directions × {tiles}²: {e:#}"));
