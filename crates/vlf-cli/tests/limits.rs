@@ -231,3 +231,68 @@ fn failing_to_start_a_thread_is_an_error_not_a_hang() {
         assert_eq!(names_in(dir.path()), ["scene.vlf"], "--nproc={processes}: left files behind");
     }
 }
+
+// ---------------------------------------------------------------------------------------------
+// The limits table of docs/reliability.md
+
+/// The text inside a Markdown code span (`` `x` `` or ``` `` x `` ```).
+fn code_span(cell: &str) -> &str {
+    let cell = cell.trim();
+    cell.strip_prefix("`` ")
+        .and_then(|c| c.strip_suffix(" ``"))
+        .or_else(|| cell.strip_prefix('`').and_then(|c| c.strip_suffix('`')))
+        .unwrap_or_else(|| panic!("not a code span: {cell:?}"))
+}
+
+/// Bytes from a size as the messages print it (`741.7 GiB`), rounded down to the tenth.
+fn size_of_text(text: &str) -> u64 {
+    let (number, unit) = text.split_once(' ').unwrap();
+    let scale = match unit {
+        "GiB" => 1u64 << 30,
+        "TiB" => 1 << 40,
+        other => panic!("unit {other}"),
+    };
+    (number.parse::<f64>().unwrap() * scale as f64) as u64
+}
+
+#[test]
+fn the_limits_table_is_what_the_commands_do() {
+    let doc = std::fs::read_to_string(Path::new(common::DOCS).join("reliability.md")).unwrap();
+    let (start, end) = (doc.find("<!-- limits:begin -->").unwrap(), doc.find("<!-- limits:end -->").unwrap());
+    let rows: Vec<&str> = doc[start..end].lines().filter(|l| l.starts_with('|')).skip(2).collect();
+    assert!(rows.len() >= 20, "only {} rows", rows.len());
+    let dir = tempdir();
+    let field = bunny(dir.path());
+    std::fs::rename(&field, dir.path().join("field.vlf")).unwrap();
+    let (free, _) = common::disk_space(dir.path());
+    let memory = common::memory_available().unwrap() / 4 * 3;
+    for row in rows {
+        let cells: Vec<&str> = row.trim().trim_matches('|').split(" | ").collect();
+        assert_eq!(cells.len(), 4, "case | command | exit | standard error: {row}");
+        let command_line = code_span(cells[1]);
+        let exit: i32 = cells[2].trim().parse().unwrap();
+        let expected = code_span(cells[3]);
+        // A message that goes on with this machine's numbers: run only where the machine has less
+        // than the row needs (else the command would do the work for real).
+        if let Some(prefix) = expected.strip_suffix('…') {
+            let needs = prefix.split(" needs ").nth(1).unwrap().trim_start_matches("up to ");
+            let needed = size_of_text(&needs.split(' ').take(2).collect::<Vec<_>>().join(" "));
+            let has = if prefix.contains(" of memory") { memory } else { free };
+            if needed <= has {
+                println!("skipped, this machine has room: {command_line}");
+                continue;
+            }
+        }
+        let mesh = mesh("bunny.obj");
+        let args: Vec<&str> =
+            command_line.split(' ').map(|a| if a == "MESH" { s(&mesh) } else { a }).collect();
+        let r = run(command().current_dir(dir.path()).args(&args));
+        assert_eq!(r.code, exit, "`{command_line}`: exit code\n{}", r.stderr);
+        let first = r.stderr.lines().next().unwrap_or("");
+        match expected.strip_suffix('…') {
+            Some(prefix) => assert!(first.starts_with(prefix), "`{command_line}`:\n{first}\nnot\n{prefix}"),
+            None => assert_eq!(first, expected, "`{command_line}`"),
+        }
+        assert_eq!(names_in(dir.path()), ["field.vlf"], "`{command_line}` left files behind");
+    }
+}
