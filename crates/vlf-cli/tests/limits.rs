@@ -284,8 +284,7 @@ fn the_limits_table_is_what_the_commands_do() {
             }
         }
         let mesh = mesh("bunny.obj");
-        let args: Vec<&str> =
-            command_line.split(' ').map(|a| if a == "MESH" { s(&mesh) } else { a }).collect();
+        let args: Vec<&str> = command_line.split(' ').map(|a| if a == "MESH" { s(&mesh) } else { a }).collect();
         let r = run(command().current_dir(dir.path()).args(&args));
         assert_eq!(r.code, exit, "`{command_line}`: exit code\n{}", r.stderr);
         let first = r.stderr.lines().next().unwrap_or("");
