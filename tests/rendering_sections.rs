@@ -230,11 +230,11 @@ fn lying_records_never_make_the_runtime_or_the_renderer_panic() {
         let lights: Vec<_> = field.lights().filter_map(|l| vlf_render::Light::from_scene_light(&l)).collect();
         let scene = vlf_render::Scene::from_field(&field, &vlf_render::SceneOptions::default());
         let settings = vlf_render::Settings { width: 12, height: 9, samples: 1, ..Default::default() };
-        let (center, radius) = field.bounding_sphere();
+        let bounds = vlf_render::SceneBounds::of(&field);
         let view = cameras
             .first()
             .and_then(|c| vlf_render::View::from_scene_camera(c, 12.0 / 9.0))
-            .unwrap_or_else(|| vlf_render::View::outside(center, radius, 12.0 / 9.0));
+            .unwrap_or_else(|| vlf_render::View::outside(&bounds, 12.0 / 9.0));
         let frame = vlf_render::render(&field, &scene, &view, &lights, &settings, &|_| {});
         let _ = vlf_render::to_srgb8(&frame, 1.0);
     }

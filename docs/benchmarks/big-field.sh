@@ -67,15 +67,15 @@ open_small=$(open_line "$small")
 # read the rays, trace on all cores, write the hits).
 for name in big small; do
   f=${!name}
-  $B rays "$f" --view outside -o "$W/$name.rays"
+  $B rays "$f" --view outside --width 512 --height 512 -o "$W/$name.rays"
 done
 hyperfine -N --warmup 3 --runs 30 --export-json "$W/dump.json" \
   -n "dump big" "$B dump $big" -n "dump small" "$B dump $small" >/dev/null
 hyperfine -N --warmup 2 --runs 10 --export-json "$W/trace.json" \
-  -n "trace big" "$B trace $big --rays $W/big.rays --out $W/big.hits" \
-  -n "trace small" "$B trace $small --rays $W/small.rays --out $W/small.hits" >/dev/null
-/usr/bin/time -v -o "$W/trace-big.time" $B trace "$big" --rays "$W/big.rays" --out "$W/big.hits" --json >"$W/trace-big.json"
-/usr/bin/time -v -o "$W/trace-small.time" $B trace "$small" --rays "$W/small.rays" --out "$W/small.hits" --json >"$W/trace-small.json"
+  -n "trace big" "$B trace $big --rays $W/big.rays -o $W/big.hits" \
+  -n "trace small" "$B trace $small --rays $W/small.rays -o $W/small.hits" >/dev/null
+/usr/bin/time -v -o "$W/trace-big.time" $B trace "$big" --rays "$W/big.rays" -o "$W/big.hits" --json >"$W/trace-big.json"
+/usr/bin/time -v -o "$W/trace-small.time" $B trace "$small" --rays "$W/small.rays" -o "$W/small.hits" --json >"$W/trace-small.json"
 /usr/bin/time -v -o "$W/verify-big.time" $B dump "$big" --verify --quiet >"$W/verify-big.txt"
 /usr/bin/time -v -o "$W/verify-small.time" $B dump "$small" --verify --quiet >"$W/verify-small.txt"
 

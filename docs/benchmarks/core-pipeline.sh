@@ -22,9 +22,9 @@ for m in bunny random-10k random-100k; do
 import json; d=json.load(open('$W/$m.bake.json'))
 print(f\"| $m | {d['triangles']} | {d['directions']} dirs × {d['tile_resolution']}² tiles | {d['seconds']:.2f} | {int(open('$W/$m.rss').read())/1024:.0f} | {d['bytes']/2**20:.1f} MiB |\", end='')")
   for v in outside inside; do
-    $B rays "$W/$m.vlf" --view $v -o "$W/$m-$v.rays"
-    $B trace "$W/$m.vlf" --rays "$W/$m-$v.rays" --out "$W/$m-$v.hits" > /dev/null   # warm-up
-    med=$(for i in 1 2 3 4 5 6 7; do $B trace "$W/$m.vlf" --rays "$W/$m-$v.rays" --out "$W/$m-$v.hits" --json; done \
+    $B rays "$W/$m.vlf" --view $v --width 512 --height 512 -o "$W/$m-$v.rays"
+    $B trace "$W/$m.vlf" --rays "$W/$m-$v.rays" -o "$W/$m-$v.hits" > /dev/null   # warm-up
+    med=$(for i in 1 2 3 4 5 6 7; do $B trace "$W/$m.vlf" --rays "$W/$m-$v.rays" -o "$W/$m-$v.hits" --json; done \
       | python3 -c "import sys,json,statistics; print('%.2f' % statistics.median(json.loads(l)['mrays_per_s'] for l in sys.stdin))")
     row="$row $med |"
   done

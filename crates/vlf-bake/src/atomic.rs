@@ -1,11 +1,72 @@
 //! Atomic writes: every file this crate and the command line write (fields, packed fields,
 //! shards, cache entries, reports, pictures, ray and hit files) goes to a locked temporary file
 //! beside its path and is renamed over it, and the leftovers of killed writers are cleaned up.
+//!
+//! Every temporary file a live [`AtomicFile`] holds is listed in a process-wide registry, so that
+//! a program interrupted by a signal can remove them all before it exits
+//! ([`remove_live_temp_files`]; the command line's SIGINT and SIGTERM handler calls it).
 
+use std::collections::BTreeSet;
 use std::fs::File;
 use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};
+use std::sync::{Mutex, MutexGuard};
 use std::time::Duration;
+
+/// The temporary files of the live [`AtomicFile`]s of this process, and whether the process is
+/// being interrupted (after which no temporary file is created or renamed into place).
+struct Registry {
+    live: BTreeSet<PathBuf>,
+    interrupted: bool,
+}
+
+static REGISTRY: Mutex<Registry> = Mutex::new(Registry { live: BTreeSet::new(), interrupted: false });
+
+/// The registry, whatever a thread that panicked while holding it left (a set of paths stays a
+/// set of paths).
+fn registry() -> MutexGuard<'static, Registry> {
+    REGISTRY.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
+}
+
+/// The error of a write asked for, or committed, after [`remove_live_temp_files`] ran.
+fn interrupted() -> io::Error {
+    io::Error::new(io::ErrorKind::Interrupted, "interrupted: temporary files were removed")
+}
+
+/// Removes the temporary file of every live [`AtomicFile`] of this process and stops any from
+/// being created or committed afterwards; returns the paths it removed. For a process that is
+/// about to exit on a signal (the command line's SIGINT and SIGTERM handler), or on a failure it
+/// cannot unwind from: the outputs keep their previous contents, and no temporary file is left
+/// for a later write to clean up. A commit running at the same time either finishes its rename
+/// first (its path then holds the new file, complete) or fails: never half of each.
+///
+/// Call it from an ordinary thread, not from a signal handler (it locks a mutex and allocates).
+pub fn remove_live_temp_files() -> Vec<PathBuf> {
+    let mut registry = registry();
+    registry.interrupted = true;
+    let live = std::mem::take(&mut registry.live);
+    live.into_iter().filter(|path| std::fs::remove_file(path).is_ok()).collect()
+}
+
+/// The registration of one temporary file: removed from the registry when dropped.
+struct Live(PathBuf);
+
+impl Live {
+    fn register(path: &Path) -> io::Result<Live> {
+        let mut registry = registry();
+        if registry.interrupted {
+            return Err(interrupted());
+        }
+        registry.live.insert(path.to_path_buf());
+        Ok(Live(path.to_path_buf()))
+    }
+}
+
+impl Drop for Live {
+    fn drop(&mut self) {
+        registry().live.remove(&self.0);
+    }
+}
 
 /// The directory that will hold `path`.
 pub fn parent_dir(path: &Path) -> PathBuf {
@@ -28,6 +89,9 @@ pub fn parent_dir(path: &Path) -> PathBuf {
 pub struct AtomicFile {
     tmp: tempfile::NamedTempFile,
     path: PathBuf,
+    /// Listed in the registry from creation to the rename or the drop (declared after `tmp`, so a
+    /// dropped file is removed before it leaves the registry).
+    live: Live,
 }
 
 /// How old an unlocked temporary file must be before a later write of the same path removes it.
@@ -75,11 +139,16 @@ impl AtomicFile {
         // A new file's usual permissions (0666 less the umask), not tempfile's private 0600.
         #[cfg(unix)]
         builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
+        if registry().interrupted {
+            return Err(interrupted());
+        }
         let tmp = builder.tempfile_in(parent_dir(path))?;
         // Marks the file as being written for as long as this process lives. Where the file
         // system has no locks, nothing is marked, and no leftover is ever removed as stale.
         try_lock(tmp.as_file());
-        Ok(AtomicFile { tmp, path: path.to_path_buf() })
+        // Refused if an interruption came between the check above and now: `tmp` is removed.
+        let live = Live::register(tmp.path())?;
+        Ok(AtomicFile { tmp, path: path.to_path_buf(), live })
     }
 
     pub fn file(&self) -> &File {
@@ -91,13 +160,25 @@ impl AtomicFile {
         self.tmp.path()
     }
 
-    /// Syncs the file and renames it over the path, then syncs the directory.
+    /// Syncs the file and renames it over the path, then syncs the directory. Fails, leaving the
+    /// path as it was, once [`remove_live_temp_files`] has run.
     pub fn commit(self) -> io::Result<()> {
-        self.tmp.as_file().sync_all()?;
-        self.tmp.persist(&self.path).map_err(|e| e.error)?;
+        let AtomicFile { tmp, path, live } = self;
+        tmp.as_file().sync_all()?;
+        {
+            // The rename and the registry change under one lock: an interruption sees either a
+            // live temporary file (and removes it) or a renamed one (and leaves the path alone).
+            let mut registry = registry();
+            if registry.interrupted {
+                return Err(interrupted());
+            }
+            tmp.persist(&path).map_err(|e| e.error)?;
+            registry.live.remove(&live.0);
+        }
+        drop(live);
         // Makes the rename durable. Some file systems refuse to sync a directory; the rename has
         // happened either way.
-        if let Ok(d) = File::open(parent_dir(&self.path)) {
+        if let Ok(d) = File::open(parent_dir(&path)) {
             let _ = d.sync_all();
         }
         Ok(())
@@ -185,4 +266,28 @@ pub fn write_atomically<T>(path: &Path, write: impl FnOnce(&mut BufWriter<&File>
     };
     tmp.commit()?;
     Ok(value)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn listed(path: &Path) -> bool {
+        registry().live.contains(path)
+    }
+
+    /// A temporary file is listed from its creation to its rename or its removal. (Interrupting
+    /// is tested in `tests/interrupt.rs`, a process of its own: it stops every later write.)
+    #[test]
+    fn live_temporary_files_are_listed_until_committed_or_dropped() {
+        let dir = tempfile::tempdir().unwrap();
+        let committed = AtomicFile::create(&dir.path().join("a.bin")).unwrap();
+        let dropped = AtomicFile::create(&dir.path().join("b.bin")).unwrap();
+        let (a, b) = (committed.temp_path().to_path_buf(), dropped.temp_path().to_path_buf());
+        assert!(listed(&a) && listed(&b));
+        committed.commit().unwrap();
+        drop(dropped);
+        assert!(!listed(&a) && !listed(&b));
+        assert!(dir.path().join("a.bin").exists() && !b.exists());
+    }
 }

@@ -30,6 +30,8 @@ impl From<OpenError> for Failure {
             OpenError::Io { .. } => VLF_ERR_IO,
             OpenError::Format { error: FormatError::OutOfMemory { .. }, .. }
             | OpenError::Bytes(FormatError::OutOfMemory { .. }) => VLF_ERR_OUT_OF_MEMORY,
+            OpenError::Format { error: FormatError::UnpackedTooLarge { .. }, .. }
+            | OpenError::Bytes(FormatError::UnpackedTooLarge { .. }) => VLF_ERR_LIMIT,
             _ => VLF_ERR_FORMAT,
         };
         Failure { status, message: e.to_string() }
@@ -180,6 +182,19 @@ pub(crate) fn check_disjoint(a: std::ops::Range<usize>, b: std::ops::Range<usize
         return Err(Failure::invalid(format!("{what} overlap")));
     }
     Ok(())
+}
+
+/// Checks that `index` is below `count` things the field has (`what`: `materials`, ...).
+pub(crate) fn index_range(index: u32, count: usize, what: &str) -> Result<(), Failure> {
+    if index as usize >= count {
+        return Err(Failure::invalid(format!("index {index} is out of range: the field has {count} {what}")));
+    }
+    Ok(())
+}
+
+/// A count for C: the field's `count` things, which its sections bound far below `u32::MAX`.
+pub(crate) fn count_u32(count: usize) -> u32 {
+    u32::try_from(count).unwrap_or(u32::MAX)
 }
 
 pub(crate) fn triangle_range(field: &Field, prim: u32) -> Result<(), Failure> {

@@ -39,20 +39,25 @@
 //!
 //! # Lifetimes
 //! A `VlfField` owns its mapping (or its copy of the bytes); the strings that
-//! [`vlf_provenance`] returns point into it and stay valid until [`vlf_close`].
+//! [`vlf_provenance`], [`vlf_material`], [`vlf_camera`] and [`vlf_light`] return point into it and
+//! stay valid until [`vlf_close`].
 
 #![deny(missing_docs)]
 
 mod boundary;
+mod info;
+mod scene;
 mod types;
 
 use boundary::*;
+pub use info::*;
+pub use scene::*;
 use std::ffi::{CStr, c_char, c_void};
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::Path;
 use types::VlfStatus::*;
 pub use types::*;
-use vlf_runtime::{Field, Hit};
+use vlf_runtime::{Hit, OpenOptions};
 
 /// The version of this library, e.g. `"0.1.0"`: a static NUL-terminated string.
 #[unsafe(no_mangle)]
@@ -72,6 +77,7 @@ pub extern "C" fn vlf_status_name(status: i32) -> *const c_char {
         4 => c"VLF_ERR_FORMAT",
         5 => c"VLF_ERR_INTERNAL",
         6 => c"VLF_ERR_OUT_OF_MEMORY",
+        7 => c"VLF_ERR_LIMIT",
         _ => c"unknown status",
     };
     name.as_ptr()
@@ -106,24 +112,77 @@ pub extern "C" fn vlf_last_error_message() -> *const c_char {
 ///
 /// Returns `VLF_OK`; `VLF_ERR_IO` if the file cannot be opened or mapped; `VLF_ERR_FORMAT` if it
 /// is not a valid field (or a packed field that does not decode); `VLF_ERR_OUT_OF_MEMORY` if a
-/// packed field's decoded bytes cannot be allocated; `VLF_ERR_NULL_ARGUMENT`. `*out` is set to
-/// NULL on failure.
+/// packed field's decoded bytes cannot be allocated; `VLF_ERR_NULL_ARGUMENT`;
+/// `VLF_ERR_INVALID_ARGUMENT` if `out` is misaligned. `*out` is set to NULL on failure (when `out`
+/// itself is usable).
 ///
 /// # Safety
 /// `path` must be NULL or a NUL-terminated string; `out` must be NULL or valid for writing a
 /// pointer.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn vlf_open_path(path: *const c_char, out: *mut *mut VlfField) -> VlfStatus {
-    call("vlf_open_path", || {
+    // SAFETY: the caller's promises; no options.
+    unsafe { open_path("vlf_open_path", path, std::ptr::null(), out) }
+}
+
+/// `vlf_open_path` with options: `options` NULL gives the defaults (as `vlf_open_path`), else
+/// `options->max_unpacked_bytes` caps the memory a packed field may be decoded into (0: no cap
+/// but the format's). A packed field over the cap is refused before anything is allocated.
+///
+/// Returns what `vlf_open_path` returns, and `VLF_ERR_LIMIT` for a packed field that decodes to
+/// more than `max_unpacked_bytes`; `VLF_ERR_INVALID_ARGUMENT` if `options` is misaligned. `*out`
+/// is set to NULL on failure.
+///
+/// # Safety
+/// As `vlf_open_path`; `options` must be NULL or point to a `VlfOpenOptions`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn vlf_open_path_ex(
+    path: *const c_char,
+    options: *const VlfOpenOptions,
+    out: *mut *mut VlfField,
+) -> VlfStatus {
+    // SAFETY: the caller's promises.
+    unsafe { open_path("vlf_open_path_ex", path, options, out) }
+}
+
+/// The runtime's options for `options`: the defaults when it is NULL.
+///
+/// # Safety
+/// `options` must be NULL or point to a `VlfOpenOptions`.
+unsafe fn open_options(options: *const VlfOpenOptions) -> Result<OpenOptions, Failure> {
+    let mut o = OpenOptions::new();
+    if !options.is_null() {
+        // SAFETY: the caller's promise.
+        let given = unsafe { arg(options, "options") }?;
+        if given.max_unpacked_bytes != 0 {
+            o.max_unpacked_bytes(given.max_unpacked_bytes);
+        }
+    }
+    Ok(o)
+}
+
+/// The body of `vlf_open_path` and `vlf_open_path_ex`, reporting as `function`.
+///
+/// # Safety
+/// As `vlf_open_path_ex`.
+unsafe fn open_path(
+    function: &str,
+    path: *const c_char,
+    options: *const VlfOpenOptions,
+    out: *mut *mut VlfField,
+) -> VlfStatus {
+    call(function, || {
         // SAFETY: the caller's promise on `out`.
         let out = unsafe { boundary::out(out, "out") }?;
         out.write(std::ptr::null_mut());
         if path.is_null() {
             return Err(Failure::null("path"));
         }
+        // SAFETY: the caller's promise on `options`.
+        let options = unsafe { open_options(options) }?;
         // SAFETY: non-null, and NUL-terminated by the caller's promise.
         let bytes = unsafe { CStr::from_ptr(path) }.to_bytes();
-        let field = Field::open(path_of(bytes)?)?;
+        let field = options.open(path_of(bytes)?)?;
         out.write(Box::into_raw(Box::new(VlfField { field })));
         Ok(())
     })
@@ -151,23 +210,62 @@ fn path_of(bytes: &[u8]) -> Result<&Path, Failure> {
 ///
 /// Returns `VLF_OK`; `VLF_ERR_FORMAT` if the bytes are not a valid field;
 /// `VLF_ERR_OUT_OF_MEMORY` if the copy cannot be allocated; `VLF_ERR_NULL_ARGUMENT` if `data` or
-/// `out` is NULL. `*out` is set to NULL on failure.
+/// `out` is NULL; `VLF_ERR_INVALID_ARGUMENT` if `out` is misaligned or `len` is too large. `*out`
+/// is set to NULL on failure (when `out` itself is usable).
 ///
 /// # Safety
 /// `data` must be NULL or point to `len` readable bytes; `out` must be NULL or valid for writing
 /// a pointer.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn vlf_open_memory(data: *const c_void, len: usize, out: *mut *mut VlfField) -> VlfStatus {
-    call("vlf_open_memory", || {
+    // SAFETY: the caller's promises; no options.
+    unsafe { open_memory("vlf_open_memory", data, len, std::ptr::null(), out) }
+}
+
+/// `vlf_open_memory` with options, as `vlf_open_path_ex`: `options` NULL gives the defaults, else
+/// `options->max_unpacked_bytes` caps the memory a packed field may be decoded into (0: no cap
+/// but the format's).
+///
+/// Returns what `vlf_open_memory` returns, and `VLF_ERR_LIMIT` for a packed field that decodes to
+/// more than `max_unpacked_bytes`; `VLF_ERR_INVALID_ARGUMENT` if `options` is misaligned. `*out`
+/// is set to NULL on failure.
+///
+/// # Safety
+/// As `vlf_open_memory`; `options` must be NULL or point to a `VlfOpenOptions`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn vlf_open_memory_ex(
+    data: *const c_void,
+    len: usize,
+    options: *const VlfOpenOptions,
+    out: *mut *mut VlfField,
+) -> VlfStatus {
+    // SAFETY: the caller's promises.
+    unsafe { open_memory("vlf_open_memory_ex", data, len, options, out) }
+}
+
+/// The body of `vlf_open_memory` and `vlf_open_memory_ex`, reporting as `function`.
+///
+/// # Safety
+/// As `vlf_open_memory_ex`.
+unsafe fn open_memory(
+    function: &str,
+    data: *const c_void,
+    len: usize,
+    options: *const VlfOpenOptions,
+    out: *mut *mut VlfField,
+) -> VlfStatus {
+    call(function, || {
         // SAFETY: the caller's promise on `out`.
         let out = unsafe { boundary::out(out, "out") }?;
         out.write(std::ptr::null_mut());
         if data.is_null() {
             return Err(Failure::null("data"));
         }
+        // SAFETY: the caller's promise on `options`.
+        let options = unsafe { open_options(options) }?;
         // SAFETY: byte pointers need no alignment; `len` readable bytes by the caller's promise.
         let bytes = unsafe { slice_arg(data.cast::<u8>(), len, "data") }?;
-        let field = Field::from_bytes(bytes)?;
+        let field = options.from_bytes(bytes)?;
         out.write(Box::into_raw(Box::new(VlfField { field })));
         Ok(())
     })
@@ -198,7 +296,8 @@ pub unsafe extern "C" fn vlf_close(field: *mut VlfField) {
 /// Constant time to find the ray's beams, then a walk over the tiles the ray crosses; allocates
 /// nothing. Safe to call from many threads on the same field.
 ///
-/// Returns `VLF_OK` (hit or miss) or `VLF_ERR_NULL_ARGUMENT`.
+/// Returns `VLF_OK` (hit or miss), `VLF_ERR_NULL_ARGUMENT`, or `VLF_ERR_INVALID_ARGUMENT` (a
+/// misaligned pointer).
 ///
 /// # Safety
 /// `field` must be NULL or an open handle; `ray` NULL or a valid ray; `hit` NULL or writable.
@@ -216,7 +315,8 @@ pub unsafe extern "C" fn vlf_closest_hit(field: *const VlfField, ray: *const Vlf
 /// Traces `ray` for any hit on `[tmin, tmax]` (a shadow ray): writes 1 to `*hit` if something is
 /// hit, 0 if not. Stops at the first hit found, so it is never slower than `vlf_closest_hit`.
 ///
-/// Returns `VLF_OK` or `VLF_ERR_NULL_ARGUMENT`.
+/// Returns `VLF_OK` (hit or miss), `VLF_ERR_NULL_ARGUMENT`, or `VLF_ERR_INVALID_ARGUMENT` (a
+/// misaligned pointer).
 ///
 /// # Safety
 /// `field` must be NULL or an open handle; `ray` NULL or a valid ray; `hit` NULL or writable.
@@ -301,7 +401,7 @@ pub unsafe extern "C" fn vlf_any_hits(
 
 /// The number of triangles in the field, in `*count`. Triangle ids run from 0 to `count − 1`.
 ///
-/// Returns `VLF_OK` or `VLF_ERR_NULL_ARGUMENT`.
+/// Returns `VLF_OK`, `VLF_ERR_NULL_ARGUMENT`, or `VLF_ERR_INVALID_ARGUMENT` (a misaligned pointer).
 ///
 /// # Safety
 /// `field` must be NULL or an open handle; `count` NULL or writable.
@@ -319,7 +419,7 @@ pub unsafe extern "C" fn vlf_triangle_count(field: *const VlfField, count: *mut 
 /// `v0.x, v0.y, v0.z, v1.x, …, v2.z`.
 ///
 /// Returns `VLF_OK`, `VLF_ERR_NULL_ARGUMENT`, or `VLF_ERR_INVALID_ARGUMENT` if `prim` is not
-/// below the triangle count.
+/// below the triangle count or a pointer is misaligned.
 ///
 /// # Safety
 /// `field` must be NULL or an open handle; `vertices` NULL or room for 9 floats.
@@ -339,9 +439,9 @@ pub unsafe extern "C" fn vlf_triangle(field: *const VlfField, prim: u32, vertice
 /// Where triangle `prim` came from, in `*provenance`. Its strings point into the field and stay
 /// valid until `vlf_close`; they are not NUL-terminated.
 ///
-/// Returns `VLF_OK`; `VLF_ERR_INVALID_ARGUMENT` if `prim` is not below the triangle count;
-/// `VLF_ERR_FORMAT` if the field's provenance of that triangle is corrupt (a reference out of
-/// bounds or a name that is not UTF-8: the open checks do not read that deep);
+/// Returns `VLF_OK`; `VLF_ERR_INVALID_ARGUMENT` if `prim` is not below the triangle count (or a
+/// pointer is misaligned); `VLF_ERR_FORMAT` if the field's provenance of that triangle is corrupt
+/// (a reference out of bounds or a name that is not UTF-8: the open checks do not read that deep);
 /// `VLF_ERR_NULL_ARGUMENT`.
 ///
 /// # Safety
@@ -379,7 +479,7 @@ pub unsafe extern "C" fn vlf_provenance(
 /// The field's content hash (`formats/vlf.md` §3.1), 32 bytes written to `hash[0..32]`. It
 /// identifies the file's exact bytes; `vlf-bake dump` prints it in hex.
 ///
-/// Returns `VLF_OK` or `VLF_ERR_NULL_ARGUMENT`.
+/// Returns `VLF_OK`, `VLF_ERR_NULL_ARGUMENT`, or `VLF_ERR_INVALID_ARGUMENT` (a misaligned handle).
 ///
 /// # Safety
 /// `field` must be NULL or an open handle; `hash` NULL or room for 32 bytes.
@@ -397,7 +497,7 @@ pub unsafe extern "C" fn vlf_content_hash(field: *const VlfField, hash: *mut u8)
 /// identifies the bake's inputs and parameters: two fields baked from the same meshes with the
 /// same parameters share it.
 ///
-/// Returns `VLF_OK` or `VLF_ERR_NULL_ARGUMENT`.
+/// Returns `VLF_OK`, `VLF_ERR_NULL_ARGUMENT`, or `VLF_ERR_INVALID_ARGUMENT` (a misaligned handle).
 ///
 /// # Safety
 /// `field` must be NULL or an open handle; `hash` NULL or room for 32 bytes.
@@ -414,7 +514,8 @@ pub unsafe extern "C" fn vlf_input_hash(field: *const VlfField, hash: *mut u8) -
 /// The scene's bounding sphere: centre in `center[0..3]`, radius in `*radius`. Every triangle
 /// lies inside it; use it to place a camera.
 ///
-/// Returns `VLF_OK` or `VLF_ERR_NULL_ARGUMENT`.
+/// Returns `VLF_OK`, `VLF_ERR_NULL_ARGUMENT`, or `VLF_ERR_INVALID_ARGUMENT` (a misaligned pointer,
+/// or `radius` inside `center`).
 ///
 /// # Safety
 /// `field` must be NULL or an open handle; `center` NULL or room for 3 doubles; `radius` NULL or
@@ -473,6 +574,7 @@ mod tests {
             VLF_ERR_FORMAT,
             VLF_ERR_INTERNAL,
             VLF_ERR_OUT_OF_MEMORY,
+            VLF_ERR_LIMIT,
         ] {
             // SAFETY: static NUL-terminated strings.
             let name = unsafe { CStr::from_ptr(vlf_status_name(s as i32)) };

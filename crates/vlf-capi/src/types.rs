@@ -27,6 +27,9 @@ pub enum VlfStatus {
     /// Memory for the field could not be allocated (opening from memory, or decoding a packed
     /// field).
     VLF_ERR_OUT_OF_MEMORY = 6,
+    /// The field exceeds a limit the caller set: a packed field that decodes to more than
+    /// `VlfOpenOptions.max_unpacked_bytes`.
+    VLF_ERR_LIMIT = 7,
 }
 
 /// The triangle id of a miss (`0xFFFFFFFF`), as in a hits file.
@@ -119,6 +122,161 @@ pub struct VlfProvenance {
     pub material: u32,
     /// The triangle's index within its source.
     pub index: u32,
+}
+
+/// How to open a field (`vlf_open_path_ex`, `vlf_open_memory_ex`). A NULL options pointer means
+/// the defaults: every field zero.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+pub struct VlfOpenOptions {
+    /// Refuse a packed field (`vlf-bake pack`) whose decoded size, which its section table states
+    /// before anything is allocated, exceeds this many bytes, with `VLF_ERR_LIMIT`. 0: no limit
+    /// but the format's own (a packed section decodes to at most a fixed multiple of its size).
+    /// Raw fields are mapped, not decoded, and are not affected.
+    pub max_unpacked_bytes: u64,
+}
+
+/// The parameters a field was baked with (`formats/vlf.md` §5.2), as asked for and as chosen.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct VlfParameters {
+    /// The conservative margin μ, in world units.
+    pub margin: f64,
+    /// The size budget of automatic parameters, and the ceiling of explicit ones, in bytes.
+    pub max_bytes: u64,
+    /// The budget per triangle of automatic parameters, in bytes.
+    pub max_bytes_per_triangle: u64,
+    /// The lattice size N: the field stores `2N² + 1` directions.
+    pub lattice_n: u32,
+    /// The number of stored directions.
+    pub directions: u32,
+    /// Tiles per side of each direction's grid.
+    pub tiles: u32,
+    /// The leaf policy's target number of triangles per leaf.
+    pub leaf_size: u32,
+    /// The leaf policy's largest BSP depth.
+    pub max_depth: u32,
+    /// The directions asked for, or `VLF_AUTOMATIC` if the baker chose them.
+    pub requested_directions: u32,
+    /// The tiles asked for, or `VLF_AUTOMATIC` if the baker chose them.
+    pub requested_tiles: u32,
+    /// Zero (padding, named so that every byte of the struct is defined).
+    pub reserved: u32,
+}
+
+/// `VlfParameters.requested_directions` and `requested_tiles`: chosen by the baker.
+pub const VLF_AUTOMATIC: u32 = 0;
+
+/// A surface of classical (Whitted) ray tracing, as a field's MATERIALS section stores it
+/// (`formats/vlf.md` §5.10). Colours are linear RGB. `name` points into the open field and is
+/// **not** NUL-terminated (`name_len` bytes, valid UTF-8, valid until `vlf_close`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct VlfMaterial {
+    /// The material's name in its input (may be empty), `name_len` bytes.
+    pub name: *const c_char,
+    /// Length of `name` in bytes.
+    pub name_len: usize,
+    /// The input (`VlfProvenance.input`'s file, by index in the field's inputs) it belongs to.
+    pub input: u32,
+    /// Its index in that input's materials (`VlfProvenance.material`).
+    pub index: u32,
+    /// Lambert reflectance.
+    pub diffuse: [f32; 3],
+    /// Phong exponent.
+    pub shininess: f32,
+    /// Colour of Phong highlights.
+    pub specular: [f32; 3],
+    /// Index of refraction of the inside (1 = rays pass unbent).
+    pub ior: f32,
+    /// Weight of the mirror-reflected ray.
+    pub reflection: [f32; 3],
+    /// Weight of the refracted ray.
+    pub transmission: [f32; 3],
+    /// Light the surface emits.
+    pub emission: [f32; 3],
+}
+
+/// `VlfCamera.projection`: a pinhole (`yfov`, `aspect_ratio`).
+pub const VLF_CAMERA_PERSPECTIVE: u32 = 1;
+/// `VlfCamera.projection`: parallel rays (`xmag`, `ymag`).
+pub const VLF_CAMERA_ORTHOGRAPHIC: u32 = 2;
+
+/// A camera placed by a glTF node (`formats/vlf.md` §5.11), in world space. `name` as in
+/// `VlfMaterial`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct VlfCamera {
+    /// The camera's name, else its node's (may be empty), `name_len` bytes.
+    pub name: *const c_char,
+    /// Length of `name` in bytes.
+    pub name_len: usize,
+    /// `VLF_CAMERA_PERSPECTIVE` or `VLF_CAMERA_ORTHOGRAPHIC`.
+    pub projection: u32,
+    /// Perspective: the vertical field of view in radians; 0 otherwise.
+    pub yfov: f32,
+    /// Perspective: width / height, or 0 if the file gives none; 0 otherwise.
+    pub aspect_ratio: f32,
+    /// Orthographic: half the view's width in world units; 0 otherwise.
+    pub xmag: f32,
+    /// Orthographic: half the view's height in world units; 0 otherwise.
+    pub ymag: f32,
+    /// The eye point.
+    pub position: [f32; 3],
+    /// The unit view direction.
+    pub forward: [f32; 3],
+    /// The unit up direction, orthogonal to `forward`.
+    pub up: [f32; 3],
+    /// The near plane's distance.
+    pub znear: f32,
+    /// The far plane's distance, or 0 for none (infinite).
+    pub zfar: f32,
+    /// The input it came from (by index in the field's inputs).
+    pub input: u32,
+    /// Its glTF camera index in that input.
+    pub camera: u32,
+    /// The glTF node that places it.
+    pub node: u32,
+}
+
+/// `VlfLight.kind`: emits from `position` in all directions; intensity in candela.
+pub const VLF_LIGHT_POINT: u32 = 1;
+/// `VlfLight.kind`: emits from `position` in a cone around `direction`.
+pub const VLF_LIGHT_SPOT: u32 = 2;
+/// `VlfLight.kind`: parallel light along `direction`; intensity in lux.
+pub const VLF_LIGHT_DIRECTIONAL: u32 = 3;
+
+/// A `KHR_lights_punctual` light placed by a glTF node (`formats/vlf.md` §5.12), in world space.
+/// `name` as in `VlfMaterial`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct VlfLight {
+    /// The light's name, else its node's (may be empty), `name_len` bytes.
+    pub name: *const c_char,
+    /// Length of `name` in bytes.
+    pub name_len: usize,
+    /// `VLF_LIGHT_POINT`, `VLF_LIGHT_SPOT` or `VLF_LIGHT_DIRECTIONAL`.
+    pub kind: u32,
+    /// Position (point and spot lights).
+    pub position: [f32; 3],
+    /// Unit direction the light travels (spot and directional lights).
+    pub direction: [f32; 3],
+    /// Linear RGB.
+    pub color: [f32; 3],
+    /// Candela (point, spot) or lux (directional).
+    pub intensity: f32,
+    /// Distance beyond which the light has no effect, or 0 for none (unlimited).
+    pub range: f32,
+    /// Spot lights: half-angle of full intensity, in radians; 0 otherwise.
+    pub inner_cone: f32,
+    /// Spot lights: half-angle where the intensity reaches zero, in radians; 0 otherwise.
+    pub outer_cone: f32,
+    /// The input it came from (by index in the field's inputs).
+    pub input: u32,
+    /// Its `KHR_lights_punctual` light index in that input.
+    pub light: u32,
+    /// The glTF node that places it.
+    pub node: u32,
 }
 
 /// An open field. Opaque: create it with `vlf_open_path` or `vlf_open_memory`, release it with

@@ -246,12 +246,34 @@ fn c_api_checks_pass() {
     let mut args = vec![archive.to_str().expect("UTF-8 path"), "-pthread"];
     args.extend(STATIC_LIBS);
     compile("c11", &[&source], &args, &exe);
+    // A glTF scene with materials, a camera and lights, and the bunny's field packed.
+    let gltf = crate_dir().join("../../fixtures/meshes/cornell/cornell.gltf");
+    let scene_path = w.join("cornell.vlf");
+    let config = BakeConfig { directions: Some(9), tiles: Some(8), ..BakeConfig::default() };
+    vlf_bake::bake_scene(&import_paths(&[gltf]).expect("import"), &config, &scene_path, &NoProgress).expect("bake");
+    let scene = Field::open(&scene_path).expect("open");
+    assert!(scene.materials().len() > 1 && scene.cameras().count() == 1 && scene.lights().count() > 1);
+    let packed = w.join("bunny.packed.vlf");
+    vlf_bake::pack::pack_path(&field_path, &packed, 3, &NoProgress).expect("pack");
+    let (major, minor) = field.format_version();
+    let p = field.parameters();
     let out = run(Command::new(&exe)
         .arg(&field_path)
         .arg(field.triangle_count().to_string())
         .arg(vlf_runtime::hex(&field.content_hash()))
         .arg("bunny.obj")
-        .arg(env!("CARGO_PKG_VERSION")));
+        .arg(env!("CARGO_PKG_VERSION"))
+        .arg(format!("{major}.{minor}"))
+        .arg(p.directions.to_string())
+        .arg(p.tiles.to_string())
+        .arg(&scene_path)
+        .arg(scene.materials().len().to_string())
+        .arg(scene.cameras().count().to_string())
+        .arg(scene.lights().count().to_string())
+        .arg(scene.cameras().next().unwrap().name)
+        .arg(scene.material_index(0).map_or(u32::MAX, |i| i as u32).to_string())
+        .arg(&packed)
+        .arg(field.len_bytes().to_string()));
     let stdout = text(&out.stdout);
     println!("{stdout}{}", text(&out.stderr));
     assert!(stdout.contains(" passed, 0 failed"), "{stdout}");

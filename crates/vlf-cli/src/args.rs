@@ -2,7 +2,10 @@
 //! help text. Values are parsed here ([`crate::values`]); what they mean is decided by the
 //! commands and the libraries.
 
-use crate::values::{parse_light, parse_size, parse_vec3};
+use crate::values::{
+    MAX_BSP_DEPTH, MAX_DIRECTIONS, MAX_IMAGE_SIDE, MAX_THREADS, MAX_TILES, MAX_TRIANGLES, between, parse_light,
+    parse_png_path, parse_up, parse_vec3, real, size,
+};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use std::path::PathBuf;
 use vlf_bake::generate;
@@ -15,7 +18,7 @@ use vlf_bake::params::{DEFAULT_LEAF_SIZE, DEFAULT_MAX_DEPTH};
     about = "Bake triangle meshes into visibility fields that load instantly, and inspect, verify and trace them.",
     long_about = "Bake triangle meshes (OBJ, glTF, GLB) into a visibility field: a precomputed, memory-mappable \
 ray-tracing acceleration structure (Mortensen et al., \"A Visibility Field for Ray Tracing\"). A field is one \
-versioned, content-hashed file; bakes are reproducible to the byte.\n\nTypical use:\n  vlf-bake bake scene.glb -o scene.vlf\n  vlf-bake dump scene.vlf --verify\n  vlf-bake render scene.vlf -o scene.png\n  vlf-bake pack scene.vlf -o scene.packed.vlf   (for transport; `unpack` restores it)\n  vlf-bake rays scene.vlf -o rays.bin && vlf-bake trace scene.vlf --rays rays.bin --out hits.bin --json"
+versioned, content-hashed file; bakes are reproducible to the byte.\n\nTypical use:\n  vlf-bake bake scene.glb -o scene.vlf\n  vlf-bake dump scene.vlf --verify\n  vlf-bake render scene.vlf -o scene.png\n  vlf-bake pack scene.vlf -o scene.packed.vlf   (for transport; `unpack` restores it)\n  vlf-bake rays scene.vlf -o rays.bin && vlf-bake trace scene.vlf --rays rays.bin -o hits.bin --json"
 )]
 pub struct Cli {
     #[command(subcommand)]
@@ -67,28 +70,32 @@ pub struct BakeArgs {
     /// The field file to write (replaced atomically).
     #[arg(short, long, value_name = "FIELD")]
     pub output: PathBuf,
-    /// Number of directions l; rounded up to the next lattice size 2N²+1 (3, 9, 19, 33, 51, ..., 2049, ...).
-    /// Chosen automatically under --max-bytes if absent.
-    #[arg(long, value_name = "L")]
+    /// Number of directions l, 3 to 33554433; rounded up to the next lattice size 2N²+1 (3, 9, 19,
+    /// 33, 51, ..., 2049, ...). Chosen automatically under --max-bytes if absent.
+    #[arg(long, value_name = "L", value_parser = between(3, MAX_DIRECTIONS), allow_negative_numbers = true)]
     pub directions: Option<u32>,
-    /// Tiles per side n of each direction's n×n beam grid. Chosen automatically if absent.
-    #[arg(long, value_name = "N")]
+    /// Tiles per side n of each direction's n×n beam grid, 1 to 65536. Chosen automatically if absent.
+    #[arg(long, value_name = "N", value_parser = between(1, MAX_TILES), allow_negative_numbers = true)]
     pub tiles: Option<u32>,
-    /// BSP depth policy: target triangles per leaf.
-    #[arg(long, default_value_t = DEFAULT_LEAF_SIZE, value_name = "K")]
+    /// BSP depth policy: target triangles per leaf (at least 1).
+    #[arg(long, default_value_t = DEFAULT_LEAF_SIZE, value_name = "K", value_parser = between(1, u32::MAX),
+          allow_negative_numbers = true)]
     pub leaf_size: u32,
-    /// BSP depth policy: largest depth of a tile's 1D BSP (0 = linear tiles, no BSP).
-    #[arg(long, default_value_t = DEFAULT_MAX_DEPTH, value_name = "D")]
+    /// BSP depth policy: largest depth of a tile's 1D BSP, 0 to 24 (0 = linear tiles, no BSP).
+    /// Not `render --bounces`, which once had this name.
+    #[arg(long, default_value_t = DEFAULT_MAX_DEPTH, value_name = "D", value_parser = between(0, MAX_BSP_DEPTH),
+          allow_negative_numbers = true)]
     pub max_depth: u32,
     /// Size budget for automatic parameters, and a ceiling for explicit ones: a bake with explicit
     /// parameters stops, leaving nothing behind, as soon as its field would exceed it (e.g. 4GiB, 512MiB, 1e9).
-    #[arg(long, default_value = "4GiB", value_parser = parse_size, value_name = "SIZE")]
+    #[arg(long, default_value = "4GiB", value_parser = size(), value_name = "SIZE", allow_negative_numbers = true)]
     pub max_bytes: u64,
     /// Automatic parameters aim at no more than this many bytes of field per triangle.
-    #[arg(long, default_value = "16KiB", value_parser = parse_size, value_name = "SIZE")]
+    #[arg(long, default_value = "16KiB", value_parser = size(), value_name = "SIZE", allow_negative_numbers = true)]
     pub max_bytes_per_triangle: u64,
-    /// Worker threads (default: RAYON_NUM_THREADS, else all cores). The output does not depend on it.
-    #[arg(long, value_name = "T")]
+    /// Worker threads, 1 to 1024; more than the cores available are reduced to them, with a warning
+    /// (default: RAYON_NUM_THREADS, else all cores). The output does not depend on it.
+    #[arg(long, value_name = "T", value_parser = between(1, MAX_THREADS), allow_negative_numbers = true)]
     pub threads: Option<usize>,
     /// No progress bar and no summary on success.
     #[arg(short, long)]
@@ -161,7 +168,7 @@ pub enum CacheAction {
     /// the cache fits in --max-size; and temporary files left by crashed bakes.
     Prune {
         /// Keep at most this many bytes (e.g. 20GiB).
-        #[arg(long, value_parser = parse_size, value_name = "SIZE")]
+        #[arg(long, value_parser = size(), value_name = "SIZE", allow_negative_numbers = true)]
         max_size: Option<u64>,
         /// Remove entries not used for this long (e.g. 30d, 12h, 90m).
         #[arg(long, value_parser = vlf_bake::cache::parse_duration, value_name = "DURATION")]
@@ -193,11 +200,12 @@ pub struct PackArgs {
     #[arg(short, long, value_name = "PACKED")]
     pub output: PathBuf,
     /// zstd level, from 1 (fastest) to 19 (smallest). The output does not depend on anything else.
-    #[arg(long, default_value_t = vlf_bake::pack::DEFAULT_LEVEL, value_name = "N",
-          value_parser = clap::value_parser!(i32).range(*vlf_bake::pack::LEVELS.start() as i64..=*vlf_bake::pack::LEVELS.end() as i64))]
+    #[arg(long, default_value_t = vlf_bake::pack::DEFAULT_LEVEL, value_name = "N", allow_negative_numbers = true,
+          value_parser = between(*vlf_bake::pack::LEVELS.start(), *vlf_bake::pack::LEVELS.end()))]
     pub level: i32,
-    /// Worker threads (default: RAYON_NUM_THREADS, else all cores); each compresses whole sections.
-    #[arg(long, value_name = "T")]
+    /// Worker threads, 1 to 1024, at most the cores available (default: RAYON_NUM_THREADS, else all
+    /// cores); each compresses whole sections.
+    #[arg(long, value_name = "T", value_parser = between(1, MAX_THREADS), allow_negative_numbers = true)]
     pub threads: Option<usize>,
     /// No progress bar and no summary on success.
     #[arg(short, long)]
@@ -229,17 +237,22 @@ pub struct TraceArgs {
     /// Rays: 32-byte little-endian records (formats/rays.md).
     #[arg(long, value_name = "FILE")]
     pub rays: PathBuf,
-    /// Hits: 16-byte records, one per ray (formats/rays.md).
-    #[arg(long, value_name = "FILE")]
-    pub out: PathBuf,
+    /// The hits file to write: 16-byte records, one per ray (formats/rays.md). `--out` is an old
+    /// spelling, still accepted.
+    #[arg(short, long, value_name = "FILE", alias = "out")]
+    pub output: PathBuf,
     /// Answer any-hit (shadow) queries instead of closest-hit.
     #[arg(long)]
     pub any_hit: bool,
+    /// No summary on success.
+    #[arg(short, long)]
+    pub quiet: bool,
     /// Print rays, hits, seconds (tracing only) and mrays_per_s as one JSON object.
     #[arg(long)]
     pub json: bool,
-    /// Worker threads (default: RAYON_NUM_THREADS, else all cores).
-    #[arg(long, value_name = "T")]
+    /// Worker threads, 1 to 1024, at most the cores available (default: RAYON_NUM_THREADS, else
+    /// all cores).
+    #[arg(long, value_name = "T", value_parser = between(1, MAX_THREADS), allow_negative_numbers = true)]
     pub threads: Option<usize>,
 }
 
@@ -253,17 +266,26 @@ pub enum View {
 
 #[derive(Args)]
 pub struct RaysArgs {
-    /// The field whose bounding sphere the camera frames.
+    /// The field whose scene the camera frames.
     pub field: PathBuf,
-    /// The rays file to write.
+    /// The rays file to write: one 32-byte record per pixel, row by row (formats/rays.md).
     #[arg(short, long, value_name = "FILE")]
     pub output: PathBuf,
+    /// Where the camera is: outside the scene framing all of it, or inside looking across it.
     #[arg(long, value_enum, default_value = "outside")]
     pub view: View,
-    #[arg(long, default_value_t = 512)]
-    pub width: u32,
-    #[arg(long, default_value_t = 512)]
-    pub height: u32,
+    /// Image width in pixels, 1 to 65535 (default 640; with --height alone, 4:3 to it).
+    #[arg(long, value_name = "PIXELS", value_parser = between(1, MAX_IMAGE_SIDE), allow_negative_numbers = true)]
+    pub width: Option<u32>,
+    /// Image height in pixels, 1 to 65535 (default 480; with --width alone, 3:4 of it).
+    #[arg(long, value_name = "PIXELS", value_parser = between(1, MAX_IMAGE_SIDE), allow_negative_numbers = true)]
+    pub height: Option<u32>,
+    /// No summary on success.
+    #[arg(short, long)]
+    pub quiet: bool,
+    /// Print the summary (output, rays, width, height, view, bytes) as one JSON object.
+    #[arg(long)]
+    pub json: bool,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -282,21 +304,23 @@ pub enum WorkArg {
 pub struct RenderArgs {
     /// The field file.
     pub field: PathBuf,
-    /// The PNG to write.
-    #[arg(short, long, value_name = "IMAGE.png")]
+    /// The PNG to write (the name must end in .png).
+    #[arg(short, long, value_name = "IMAGE.png", value_parser = parse_png_path)]
     pub output: PathBuf,
-    /// Image width in pixels.
-    #[arg(long, default_value_t = 640)]
-    pub width: u32,
-    /// Image height (default: from the width and the field camera's aspect ratio, else 480).
-    #[arg(long)]
+    /// Image width in pixels, 1 to 65535 (default 640, or from --height and the aspect ratio).
+    #[arg(long, value_name = "PIXELS", value_parser = between(1, MAX_IMAGE_SIDE), allow_negative_numbers = true)]
+    pub width: Option<u32>,
+    /// Image height in pixels, 1 to 65535 (default: from the width and the field camera's aspect
+    /// ratio, else 4:3).
+    #[arg(long, value_name = "PIXELS", value_parser = between(1, MAX_IMAGE_SIDE), allow_negative_numbers = true)]
     pub height: Option<u32>,
     /// Frame the whole scene from outside, or look across it from inside (like `rays --view`).
     /// Default: the field's first glTF camera if it has one, else outside.
     #[arg(long, value_enum, conflicts_with_all = ["camera", "eye"])]
     pub view: Option<View>,
     /// Use the field's glTF camera number N (0 = first; `dump` counts them).
-    #[arg(long, value_name = "N", conflicts_with = "eye")]
+    #[arg(long, value_name = "N", conflicts_with = "eye", value_parser = between(0, u32::MAX as usize),
+          allow_negative_numbers = true)]
     pub camera: Option<usize>,
     /// Place a pinhole camera at X,Y,Z.
     #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3, allow_hyphen_values = true)]
@@ -304,11 +328,12 @@ pub struct RenderArgs {
     /// The point an --eye camera looks at (default: the centre of the scene).
     #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3, allow_hyphen_values = true, requires = "eye")]
     pub target: Option<[f64; 3]>,
-    /// The up direction of an --eye camera.
-    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3, default_value = "0,1,0", allow_hyphen_values = true)]
+    /// The up direction of an --eye camera: not zero, and not along the line of sight.
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_up, default_value = "0,1,0", allow_hyphen_values = true)]
     pub up: [f64; 3],
-    /// Vertical field of view of an --eye camera, in degrees.
-    #[arg(long, default_value_t = 50.0, value_name = "DEGREES")]
+    /// Vertical field of view of an --eye camera, in degrees, between 0 and 180 (both excluded).
+    #[arg(long, default_value_t = 50.0, value_name = "DEGREES", value_parser = real(0.0, 180.0, (true, true)),
+          allow_negative_numbers = true)]
     pub fov: f64,
     /// A white point light at X,Y,Z with intensity I (irradiance I/d²); repeatable. Replaces the
     /// field's lights and the default key and fill lights.
@@ -317,17 +342,21 @@ pub struct RenderArgs {
     /// Ignore the field's glTF lights: light the scene with a key and a fill light around the camera.
     #[arg(long)]
     pub default_lights: bool,
-    /// Reflection and refraction bounces after the primary ray (at most 64).
-    #[arg(long, default_value_t = 5)]
-    pub max_depth: u32,
-    /// Samples per pixel along each axis (2 = 4 rays per pixel, antialiased).
-    #[arg(long, default_value_t = 2)]
+    /// Reflection and refraction bounces after the primary ray, 0 to 64. `--max-depth` is an old
+    /// spelling, still accepted (in `bake`, --max-depth is the BSP depth).
+    #[arg(long, default_value_t = 5, value_name = "N", alias = "max-depth",
+          value_parser = between(0, vlf_render::MAX_BOUNCES), allow_negative_numbers = true)]
+    pub bounces: u32,
+    /// Samples per pixel along each axis, 1 to 16 (2 = 4 rays per pixel, antialiased).
+    #[arg(long, default_value_t = 2, value_name = "N", value_parser = between(1u32, 16), allow_negative_numbers = true)]
     pub samples: u32,
-    /// Multiply the image's brightness.
-    #[arg(long, default_value_t = 1.0)]
+    /// Multiply the image's brightness (more than 0, at most 1000).
+    #[arg(long, default_value_t = 1.0, value_name = "FACTOR", value_parser = real(0.0, 1000.0, (true, false)),
+          allow_negative_numbers = true)]
     pub exposure: f64,
-    /// Unshadowed light every surface receives.
-    #[arg(long, default_value_t = 0.06)]
+    /// Unshadowed light every surface receives, 0 to 1000.
+    #[arg(long, default_value_t = 0.06, value_name = "IRRADIANCE", value_parser = real(0.0, 1000.0, (false, false)),
+          allow_negative_numbers = true)]
     pub ambient: f64,
     /// A solid background colour R,G,B (linear, 0 to 1) instead of the sky gradient.
     #[arg(long, value_name = "R,G,B", value_parser = parse_vec3)]
@@ -335,17 +364,19 @@ pub struct RenderArgs {
     /// Flat shading: no normals interpolated across edges.
     #[arg(long)]
     pub flat: bool,
-    /// Also write a false-colour picture of the work per pixel (black = none, white = --work-max or more).
-    #[arg(long, value_name = "IMAGE.png")]
+    /// Also write a false-colour picture of the work per pixel (black = none, white = --work-max or
+    /// more); the name must end in .png.
+    #[arg(long, value_name = "IMAGE.png", value_parser = parse_png_path)]
     pub work_image: Option<PathBuf>,
     /// What the work picture shows, summed over every ray of the pixel.
     #[arg(long, value_enum, default_value = "tests")]
     pub work: WorkArg,
-    /// The work at the top of the colour scale (default: the 99th percentile of the frame).
-    #[arg(long, value_name = "COUNT")]
+    /// The work at the top of the colour scale, at least 1 (default: the 99th percentile of the frame).
+    #[arg(long, value_name = "COUNT", value_parser = between(1, u64::MAX), allow_negative_numbers = true)]
     pub work_max: Option<u64>,
-    /// Worker threads (default: RAYON_NUM_THREADS, else all cores). The picture does not depend on it.
-    #[arg(long, value_name = "T")]
+    /// Worker threads, 1 to 1024, at most the cores available (default: RAYON_NUM_THREADS, else all
+    /// cores). The picture does not depend on it.
+    #[arg(long, value_name = "T", value_parser = between(1, MAX_THREADS), allow_negative_numbers = true)]
     pub threads: Option<usize>,
     /// No progress bar and no summary on success.
     #[arg(short, long)]
@@ -367,17 +398,60 @@ pub enum SceneKind {
 
 #[derive(Args)]
 pub struct GenArgs {
+    /// Which scene: random triangles, grids or slivers.
     #[arg(value_enum)]
     pub scene: SceneKind,
-    /// Number of triangles (random, slivers) or cells per side (grid).
-    #[arg(long, default_value_t = 10_000)]
-    pub count: usize,
-    #[arg(long, default_value_t = 1)]
+    /// Number of triangles (random, slivers: 1 to 4294967295) or cells per side (grid: 1 to 23170,
+    /// making 8 × count² triangles).
+    #[arg(long, default_value_t = 10_000, value_name = "N", value_parser = between(1, MAX_TRIANGLES),
+          allow_negative_numbers = true)]
+    pub count: u64,
+    /// Seed of the random scenes: the same seed gives the same file, byte for byte.
+    #[arg(long, default_value_t = 1, value_name = "S", value_parser = between(0, u64::MAX), allow_negative_numbers = true)]
     pub seed: u64,
-    /// Random scene: half-extent of each triangle around its centre.
-    #[arg(long, default_value_t = generate::DEFAULT_TRIANGLE_SIZE)]
+    /// Random scene: half-extent of each triangle around its centre (more than 0, at most 1000).
+    #[arg(long, default_value_t = generate::DEFAULT_TRIANGLE_SIZE, value_name = "SIZE",
+          value_parser = real(0.0, 1000.0, (true, false)), allow_negative_numbers = true)]
     pub size: f64,
     /// The OBJ file to write.
     #[arg(short, long, value_name = "FILE")]
     pub output: PathBuf,
+    /// No summary on success.
+    #[arg(short, long)]
+    pub quiet: bool,
+    /// Print the summary (output, scene, triangles, seed, bytes) as one JSON object.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::CommandFactory;
+
+    /// Every value parser gives the type its field holds (a mismatch panics only when a command
+    /// is parsed, so each is parsed here with its defaults).
+    #[test]
+    fn every_subcommand_parses_with_its_defaults() {
+        Cli::command().debug_assert();
+        for args in [
+            &["bake", "m.obj", "-o", "f.vlf"][..],
+            &["merge", "a.vlfs", "-o", "f.vlf"],
+            &["cache", "list"],
+            &["cache", "prune", "--max-size", "1GiB"],
+            &["dump", "f.vlf"],
+            &["pack", "f.vlf", "-o", "p.vlf"],
+            &["unpack", "p.vlf", "-o", "f.vlf"],
+            &["trace", "f.vlf", "--rays", "r.bin", "-o", "h.bin"],
+            &["rays", "f.vlf", "-o", "r.bin"],
+            &["render", "f.vlf", "-o", "p.png", "--work-image", "w.png", "--work-max", "9", "--camera", "0"],
+            &["gen", "grid", "-o", "g.obj"],
+            &["demo"],
+        ] {
+            let argv = std::iter::once("vlf-bake").chain(args.iter().copied());
+            if let Err(e) = Cli::try_parse_from(argv) {
+                panic!("{args:?}: {e}");
+            }
+        }
+    }
 }

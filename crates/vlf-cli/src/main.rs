@@ -4,29 +4,49 @@
 //! [`commands`] calls the libraries and prints.
 //!
 //! Exit codes: 0 success; 1 the command failed (one line on standard error says why); 2 the
-//! command line was invalid. A closed output pipe (`vlf-bake dump f | head`) counts as success.
+//! command line was invalid (a value out of range included); 130 and 143 interrupted by SIGINT
+//! and SIGTERM, after removing every temporary file ([`stop`]). A closed output pipe (`vlf-bake
+//! dump f | head`) counts as success.
 
 #![forbid(unsafe_code)]
 
 mod args;
 mod commands;
+mod limits;
 mod progress;
+mod stop;
+mod threads;
 mod values;
 
-use anyhow::{Context, Result, bail};
+use anyhow::Result;
 use args::{Cli, Command};
-use clap::Parser;
+use clap::{CommandFactory, Parser};
 use std::process::ExitCode;
+use values::BadUsage;
 
 fn main() -> ExitCode {
+    if let Err(e) = stop::install() {
+        eprintln!("error: cannot install the handler of SIGINT and SIGTERM: {e}");
+        return ExitCode::FAILURE;
+    }
     let cli = Cli::parse();
-    match run(cli) {
+    let result = run(cli);
+    // A signal or a failed worker is being handled: that thread ends the process.
+    stop::wait_if_stopping();
+    match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) if is_broken_pipe(&e) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("error: {e:#}");
-            ExitCode::FAILURE
-        }
+        Err(e) => match e.downcast_ref::<BadUsage>() {
+            Some(BadUsage(message)) => {
+                let error = clap::Error::raw(clap::error::ErrorKind::ValueValidation, message);
+                let _ = error.format(&mut Cli::command()).print();
+                ExitCode::from(2)
+            }
+            None => {
+                eprintln!("error: {e:#}");
+                ExitCode::FAILURE
+            }
+        },
     }
 }
 
@@ -34,31 +54,20 @@ fn is_broken_pipe(e: &anyhow::Error) -> bool {
     e.chain().any(|c| c.downcast_ref::<std::io::Error>().is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe))
 }
 
-/// One library call per subcommand.
+/// One library call per subcommand, each on a pool of worker threads.
 fn run(cli: Cli) -> Result<()> {
+    use threads::with_threads;
     match cli.command {
         Command::Bake(a) => with_threads(a.threads, || commands::bake::run(&a)),
-        Command::Merge(a) => commands::merge::run(&a),
-        Command::Cache(a) => commands::cache::run(&a),
-        Command::Dump(a) => commands::dump::run(&a),
+        Command::Merge(a) => with_threads(None, || commands::merge::run(&a)),
+        Command::Cache(a) => with_threads(None, || commands::cache::run(&a)),
+        Command::Dump(a) => with_threads(None, || commands::dump::run(&a)),
         Command::Pack(a) => with_threads(a.threads, || commands::pack::pack(&a)),
-        Command::Unpack(a) => commands::pack::unpack(&a),
+        Command::Unpack(a) => with_threads(None, || commands::pack::unpack(&a)),
         Command::Trace(a) => with_threads(a.threads, || commands::trace::run(&a)),
         Command::Rays(a) => commands::rays::run(&a),
         Command::Render(a) => with_threads(a.threads, || commands::render::run(&a)),
         Command::Gen(a) => commands::gen_scene::run(&a),
-        Command::Demo(a) => commands::demo::run(&a),
-    }
-}
-
-/// Runs `f` on a pool of `threads` workers, or on rayon's global pool (which honours
-/// RAYON_NUM_THREADS) when `threads` is `None`.
-fn with_threads<T: Send>(threads: Option<usize>, f: impl FnOnce() -> Result<T> + Send) -> Result<T> {
-    match threads {
-        None => f(),
-        Some(0) => bail!("--threads must be at least 1"),
-        Some(t) => {
-            rayon::ThreadPoolBuilder::new().num_threads(t).build().context("cannot start worker threads")?.install(f)
-        }
+        Command::Demo(a) => with_threads(None, || commands::demo::run(&a)),
     }
 }

@@ -1,4 +1,167 @@
-//! Parsers of flag values: sizes (`4GiB`), points (`x,y,z`) and lights (`x,y,z,intensity`).
+//! Parsers of flag values: numbers within a range, sizes (`4GiB`), points (`x,y,z`), lights
+//! (`x,y,z,intensity`), up directions and PNG paths; and [`BadUsage`], a bad command line found
+//! after parsing.
+//!
+//! Every numeric flag goes through [`between`] (or [`real`], [`size`]), so a value that is out of
+//! range, negative or not a number gets the same one-line message whatever its spelling (`--tiles
+//! 0`, `--tiles -5`, `--tiles=-5`, `--tiles abc`): `--tiles must be between 1 and 65536, got 0`,
+//! as a bad command line (exit 2, with clap's usage hint).
+
+use clap::error::ErrorKind;
+use clap::{Arg, Command};
+use std::ffi::OsStr;
+use std::fmt::Display;
+use std::path::{Path, PathBuf};
+use std::str::FromStr;
+
+/// The largest `--directions`: a lattice of N = 4096 (`BakeConfig::validate`; a unit test holds
+/// the two together).
+pub const MAX_DIRECTIONS: u32 = 33_554_433;
+/// The largest `--tiles`.
+pub const MAX_TILES: u32 = 65_536;
+/// The largest `--max-depth` of a bake: the format's limit (`formats/vlf.md` §5.2).
+pub const MAX_BSP_DEPTH: u32 = 24;
+/// The most worker threads a command accepts; more than the cores available are clamped to them.
+pub const MAX_THREADS: usize = 1024;
+/// The largest image side of `render` and `rays`: width × height then always fits the u32 ray
+/// count of a rays file's reader.
+pub const MAX_IMAGE_SIDE: u32 = vlf_render::setup::MAX_SIDE;
+/// The most triangles `gen` writes: a field's triangle ids are u32, with `u32::MAX` for a miss.
+pub const MAX_TRIANGLES: u64 = u32::MAX as u64;
+
+/// A command line that parsed but asks for something impossible (a combination of flags, or a
+/// flag whose range depends on another): `main` prints it as clap prints its errors, exit 2.
+#[derive(Debug)]
+pub struct BadUsage(pub String);
+
+impl Display for BadUsage {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for BadUsage {}
+
+/// The flag as the user spells it (`--tiles`), for messages.
+fn flag_name(arg: Option<&Arg>) -> String {
+    match arg {
+        Some(a) => match (a.get_long(), a.get_short()) {
+            (Some(long), _) => format!("--{long}"),
+            (None, Some(short)) => format!("-{short}"),
+            (None, None) => a.get_id().to_string().to_uppercase(),
+        },
+        None => "the value".to_owned(),
+    }
+}
+
+/// clap's error for `message`, with its usage line and help hint: exit code 2.
+fn usage_error(cmd: &Command, message: String) -> clap::Error {
+    clap::Error::raw(ErrorKind::ValueValidation, message).format(&mut cmd.clone())
+}
+
+/// A number between `min` and `max`, both included (see [`between`]).
+#[derive(Clone, Copy, Debug)]
+pub struct Between<T> {
+    min: T,
+    max: T,
+}
+
+/// A number between `min` and `max`, both included: `--tiles must be between 1 and 65536, got
+/// 0` for anything else, including negative numbers and words.
+pub fn between<T>(min: T, max: T) -> Between<T> {
+    Between { min, max }
+}
+
+impl<T> clap::builder::TypedValueParser for Between<T>
+where
+    T: FromStr + PartialOrd + Display + Copy + Send + Sync + 'static,
+{
+    type Value = T;
+
+    fn parse_ref(&self, cmd: &Command, arg: Option<&Arg>, value: &OsStr) -> Result<T, clap::Error> {
+        let text = value.to_string_lossy();
+        match text.trim().parse::<T>() {
+            Ok(v) if v >= self.min && v <= self.max => Ok(v),
+            _ => Err(usage_error(
+                cmd,
+                format!("{} must be between {} and {}, got {text}", flag_name(arg), self.min, self.max),
+            )),
+        }
+    }
+}
+
+/// A finite real number between `min` and `max`, each bound included or `excluded` (see [`real`]).
+#[derive(Clone, Copy, Debug)]
+pub struct Real {
+    min: f64,
+    min_excluded: bool,
+    max: f64,
+    max_excluded: bool,
+}
+
+/// A finite real number between `min` and `max`; `(true, _)` excludes `min`, `(_, true)` excludes
+/// `max`: `--fov must be between 0 (excluded) and 180 (excluded), got 200`.
+pub fn real(min: f64, max: f64, excluded: (bool, bool)) -> Real {
+    Real { min, min_excluded: excluded.0, max, max_excluded: excluded.1 }
+}
+
+impl Real {
+    fn contains(&self, v: f64) -> bool {
+        let above = if self.min_excluded { v > self.min } else { v >= self.min };
+        let below = if self.max_excluded { v < self.max } else { v <= self.max };
+        v.is_finite() && above && below
+    }
+}
+
+impl clap::builder::TypedValueParser for Real {
+    type Value = f64;
+
+    fn parse_ref(&self, cmd: &Command, arg: Option<&Arg>, value: &OsStr) -> Result<f64, clap::Error> {
+        let text = value.to_string_lossy();
+        match text.trim().parse::<f64>() {
+            Ok(v) if self.contains(v) => Ok(v),
+            _ => {
+                let bound = |v: f64, excluded: bool| if excluded { format!("{v} (excluded)") } else { format!("{v}") };
+                Err(usage_error(
+                    cmd,
+                    format!(
+                        "{} must be between {} and {}, got {text}",
+                        flag_name(arg),
+                        bound(self.min, self.min_excluded),
+                        bound(self.max, self.max_excluded)
+                    ),
+                ))
+            }
+        }
+    }
+}
+
+/// A size in bytes (see [`parse_size`]): `--max-bytes must be a size between 1 B and 16 EiB (such
+/// as 4GiB, 512MiB or 1e9), got banana`.
+#[derive(Clone, Copy, Debug)]
+pub struct Size;
+
+/// A size in bytes, with the message shape of [`between`].
+pub fn size() -> Size {
+    Size
+}
+
+impl clap::builder::TypedValueParser for Size {
+    type Value = u64;
+
+    fn parse_ref(&self, cmd: &Command, arg: Option<&Arg>, value: &OsStr) -> Result<u64, clap::Error> {
+        let text = value.to_string_lossy();
+        parse_size(&text).map_err(|why| {
+            usage_error(
+                cmd,
+                format!(
+                    "{} must be a size between 1 B and 16 EiB (such as 4GiB, 512MiB or 1e9), got {text}: {why}",
+                    flag_name(arg)
+                ),
+            )
+        })
+    }
+}
 
 /// Parses `4GiB`, `512MiB`, `100MB`, `1e9`, `123456`.
 pub fn parse_size(s: &str) -> Result<u64, String> {
@@ -31,6 +194,15 @@ pub fn parse_vec3(s: &str) -> Result<[f64; 3], String> {
     Ok([v[0], v[1], v[2]])
 }
 
+/// Parses an up direction `x,y,z`: three numbers, not all zero.
+pub fn parse_up(s: &str) -> Result<[f64; 3], String> {
+    let v = parse_vec3(s)?;
+    if v.iter().all(|&c| c == 0.0) {
+        return Err(format!("`{s}` is the zero vector, which points nowhere: give an up direction such as 0,1,0"));
+    }
+    Ok(v)
+}
+
 /// Parses `x,y,z,intensity`.
 pub fn parse_light(s: &str) -> Result<[f64; 4], String> {
     let v = parse_numbers(s, 4)?;
@@ -52,9 +224,81 @@ fn parse_numbers(s: &str, count: usize) -> Result<Vec<f64>, String> {
     Ok(v)
 }
 
+/// Parses the path of a picture to write: a `.png` file (the one format `render` writes), or an
+/// existing device or FIFO such as `/dev/stdout`, which is written through.
+pub fn parse_png_path(s: &str) -> Result<PathBuf, String> {
+    let path = PathBuf::from(s);
+    if is_png_name(&path) || is_special_file(&path) {
+        return Ok(path);
+    }
+    Err(format!("`{s}` does not end in .png: render writes PNG pictures only, so name the file NAME.png"))
+}
+
+fn is_png_name(path: &Path) -> bool {
+    path.extension().is_some_and(|e| e.eq_ignore_ascii_case("png"))
+}
+
+/// An existing path that is neither a regular file nor a directory: a device, FIFO or socket.
+pub fn is_special_file(path: &Path) -> bool {
+    std::fs::metadata(path).is_ok_and(|m| !m.is_file() && !m.is_dir())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+    use clap::builder::TypedValueParser;
+    use vlf_bake::{BakeConfig, DepthPolicy};
+
+    fn parse<P: TypedValueParser>(parser: P, value: &str) -> Result<P::Value, String> {
+        let cmd = Command::new("vlf-bake");
+        let arg = Arg::new("tiles").long("tiles");
+        parser.parse_ref(&cmd, Some(&arg), OsStr::new(value)).map_err(|e| e.to_string())
+    }
+
+    #[test]
+    fn numbers_out_of_range_get_one_message_whatever_their_spelling() {
+        assert_eq!(parse(between(1u32, 65536), "16"), Ok(16));
+        assert_eq!(parse(between(1u32, 65536), " 65536 "), Ok(65536));
+        for bad in ["0", "-5", "abc", "65537", "1e3", "", "99999999999999999999"] {
+            let message = parse(between(1u32, 65536), bad).unwrap_err();
+            let first = message.lines().next().unwrap();
+            assert_eq!(first, format!("error: --tiles must be between 1 and 65536, got {bad}"));
+            assert!(message.contains("For more information, try '--help'."), "{message}");
+        }
+        assert_eq!(parse(real(0.0, 180.0, (true, true)), "50"), Ok(50.0));
+        for bad in ["0", "180", "-1", "nan", "inf", "wide"] {
+            let message = parse(real(0.0, 180.0, (true, true)), bad).unwrap_err();
+            assert!(
+                message
+                    .starts_with(&format!("error: --tiles must be between 0 (excluded) and 180 (excluded), got {bad}")),
+                "{message}"
+            );
+        }
+        assert_eq!(parse(real(0.0, 10.0, (false, false)), "0"), Ok(0.0));
+        assert!(parse(size(), "banana").unwrap_err().starts_with("error: --tiles must be a size"));
+        assert_eq!(parse(size(), "4GiB"), Ok(4 << 30));
+    }
+
+    /// The command line's ranges are the library's: the bounds validate, one step past them does
+    /// not.
+    #[test]
+    fn bake_ranges_agree_with_the_library() {
+        let d = BakeConfig::default();
+        let valid = |c: BakeConfig| c.validate().is_ok();
+        assert!(
+            valid(BakeConfig { directions: Some(3), ..d })
+                && valid(BakeConfig { directions: Some(MAX_DIRECTIONS), ..d })
+        );
+        assert!(!valid(BakeConfig { directions: Some(2), ..d }));
+        assert!(!valid(BakeConfig { directions: Some(MAX_DIRECTIONS + 1), ..d }));
+        assert!(valid(BakeConfig { tiles: Some(1), ..d }) && valid(BakeConfig { tiles: Some(MAX_TILES), ..d }));
+        assert!(!valid(BakeConfig { tiles: Some(0), ..d }) && !valid(BakeConfig { tiles: Some(MAX_TILES + 1), ..d }));
+        let depth = |max_depth| BakeConfig { depth: DepthPolicy { leaf_size: 1, max_depth }, ..d };
+        assert!(valid(depth(0)) && valid(depth(MAX_BSP_DEPTH)) && !valid(depth(MAX_BSP_DEPTH + 1)));
+        assert!(!valid(BakeConfig { depth: DepthPolicy { leaf_size: 0, max_depth: 1 }, ..d }));
+        // Every image fits the u32 ray count.
+        assert!((MAX_IMAGE_SIDE as u64).pow(2) <= u32::MAX as u64);
+    }
 
     #[test]
     fn sizes_take_decimal_and_binary_units_and_refuse_the_rest() {
@@ -77,5 +321,19 @@ mod tests {
         assert!(parse_vec3("1,2,nan").is_err());
         assert_eq!(parse_light("0,1,0,20"), Ok([0.0, 1.0, 0.0, 20.0]));
         assert!(parse_light("0,1,0,-1").unwrap_err().contains("must not be negative"));
+        assert_eq!(parse_up("0,0,1"), Ok([0.0, 0.0, 1.0]));
+        assert!(parse_up("0,0,0").unwrap_err().contains("zero vector"));
+        assert!(parse_up("0,-0,0").is_err());
+    }
+
+    #[test]
+    fn pictures_are_png_files_or_devices() {
+        assert_eq!(parse_png_path("out/a.png"), Ok(PathBuf::from("out/a.png")));
+        assert_eq!(parse_png_path("A.PNG"), Ok(PathBuf::from("A.PNG")));
+        for bad in ["x.jpg", "x", "png", "x.png.tmp"] {
+            assert!(parse_png_path(bad).unwrap_err().contains("does not end in .png"), "{bad}");
+        }
+        #[cfg(unix)]
+        assert_eq!(parse_png_path("/dev/null"), Ok(PathBuf::from("/dev/null")));
     }
 }

@@ -387,7 +387,7 @@ fn a_foreign_file_is_not_a_vlf_field() {
         for args in [
             vec!["dump", s(&foreign)],
             vec!["dump", s(&foreign), "--verify"],
-            vec!["trace", s(&foreign), "--rays", s(&foreign), "--out", s(&hits)],
+            vec!["trace", s(&foreign), "--rays", s(&foreign), "-o", s(&hits)],
         ] {
             let r = vlf(&args);
             let line = r.one_error_line();
@@ -521,7 +521,7 @@ fn output_files_get_the_same_permissions_as_any_new_file() {
     let hits = dir.path().join("hits.bin");
     let obj = dir.path().join("random.obj");
     vlf(&["rays", s(&field), "--width", "8", "--height", "8", "-o", s(&rays)]).ok();
-    vlf(&["trace", s(&field), "--rays", s(&rays), "--out", s(&hits)]).ok();
+    vlf(&["trace", s(&field), "--rays", s(&rays), "-o", s(&hits)]).ok();
     vlf(&["gen", "random", "--count", "10", "-o", s(&obj)]).ok();
     for p in [&field, &rays, &hits, &obj] {
         assert_eq!(mode(p), expected, "{} has mode {:o}, a new file gets {expected:o}", p.display(), mode(p));
@@ -537,7 +537,8 @@ fn bunny_and_rays() -> (tempfile::TempDir, PathBuf, PathBuf) {
     let field = bake_bunny(dir.path(), "bunny.vlf");
     let rays = dir.path().join("rays.bin");
     let r = vlf(&["rays", s(&field), "--view", "outside", "--width", "64", "--height", "48", "-o", s(&rays)]).ok();
-    assert_eq!((r.stdout.as_str(), r.stderr.as_str()), ("", ""));
+    let summary = format!("wrote 3072 rays (64×48, outside view) to {}: 96.0 KiB (98304 bytes)\n", rays.display());
+    assert_eq!((r.stdout.as_str(), r.stderr.as_str()), (summary.as_str(), ""));
     assert_eq!(std::fs::metadata(&rays).unwrap().len(), 64 * 48 * 32);
     (dir, field, rays)
 }
@@ -546,7 +547,7 @@ fn bunny_and_rays() -> (tempfile::TempDir, PathBuf, PathBuf) {
 fn trace_closest_hits_match_the_library_bit_for_bit() {
     let (dir, field_path, rays_path) = bunny_and_rays();
     let hits_path = dir.path().join("hits.bin");
-    let r = vlf(&["trace", s(&field_path), "--rays", s(&rays_path), "--out", s(&hits_path), "--json"]).ok();
+    let r = vlf(&["trace", s(&field_path), "--rays", s(&rays_path), "-o", s(&hits_path), "--json"]).ok();
     assert_eq!(r.stderr, "");
     let j = r.json();
     for key in ["rays", "hits", "seconds", "mrays_per_s"] {
@@ -573,7 +574,7 @@ fn trace_closest_hits_match_the_library_bit_for_bit() {
 
     // One worker thread: the same records.
     let hits1 = dir.path().join("hits1.bin");
-    let j1 = vlf(&["trace", s(&field_path), "--rays", s(&rays_path), "--out", s(&hits1), "--json", "--threads", "1"])
+    let j1 = vlf(&["trace", s(&field_path), "--rays", s(&rays_path), "-o", s(&hits1), "--json", "--threads", "1"])
         .ok()
         .json();
     assert_eq!(j1["threads"], 1);
@@ -581,7 +582,7 @@ fn trace_closest_hits_match_the_library_bit_for_bit() {
     assert!(std::fs::read(&hits1).unwrap() == std::fs::read(&hits_path).unwrap(), "--threads 1 differs");
 
     // Text output.
-    let text = vlf(&["trace", s(&field_path), "--rays", s(&rays_path), "--out", s(&hits1)]).ok();
+    let text = vlf(&["trace", s(&field_path), "--rays", s(&rays_path), "-o", s(&hits1)]).ok();
     assert!(text.stdout.starts_with(&format!("traced 3072 rays ({hit_count} hits, 0 invalid)")), "{}", text.stdout);
 }
 
@@ -593,7 +594,7 @@ fn trace_any_hit_agrees_with_the_library() {
     for threads in [None, Some("1")] {
         let hits_path = dir.path().join("any.bin");
         let mut args =
-            vec!["trace", s(&field_path), "--rays", s(&rays_path), "--out", s(&hits_path), "--any-hit", "--json"];
+            vec!["trace", s(&field_path), "--rays", s(&rays_path), "-o", s(&hits_path), "--any-hit", "--json"];
         if let Some(t) = threads {
             args.extend(["--threads", t]);
         }
@@ -629,7 +630,7 @@ fn trace_refuses_a_rays_file_that_is_not_whole_records() {
     let odd = dir.path().join("odd.bin");
     std::fs::write(&odd, &rays[..100]).unwrap();
     let hits = dir.path().join("hits.bin");
-    let r = vlf(&["trace", s(&field_path), "--rays", s(&odd), "--out", s(&hits)]);
+    let r = vlf(&["trace", s(&field_path), "--rays", s(&odd), "-o", s(&hits)]);
     let line = r.one_error_line();
     assert!(line.contains("odd.bin") && line.contains("100 bytes"), "{line}");
     assert!(line.contains("not a multiple of the 32-byte"), "{line}");
@@ -638,7 +639,7 @@ fn trace_refuses_a_rays_file_that_is_not_whole_records() {
     // An empty rays file is zero whole records: an empty hits file.
     let empty = dir.path().join("empty.bin");
     std::fs::write(&empty, b"").unwrap();
-    let j = vlf(&["trace", s(&field_path), "--rays", s(&empty), "--out", s(&hits), "--json"]).ok().json();
+    let j = vlf(&["trace", s(&field_path), "--rays", s(&empty), "-o", s(&hits), "--json"]).ok().json();
     assert_eq!(j["rays"], 0);
     assert_eq!(std::fs::metadata(&hits).unwrap().len(), 0);
 }
@@ -669,7 +670,7 @@ fn invalid_rays_are_written_as_misses_and_counted() {
 
     for any_hit in [false, true] {
         let hits_path = dir.path().join("hits.bin");
-        let mut args = vec!["trace", s(&field_path), "--rays", s(&three_path), "--out", s(&hits_path), "--json"];
+        let mut args = vec!["trace", s(&field_path), "--rays", s(&three_path), "-o", s(&hits_path), "--json"];
         if any_hit {
             args.push("--any-hit");
         }
@@ -712,7 +713,7 @@ fn a_missing_input_is_one_error_line_naming_the_file() {
     let r = vlf(&["rays", s(&dir.path().join("no_such_field.vlf")), "-o", s(&dir.path().join("r.bin"))]);
     assert!(r.one_error_line().contains("no_such_field.vlf"));
     let field = bake_bunny(dir.path(), "bunny.vlf");
-    let r = vlf(&["trace", s(&field), "--rays", s(&dir.path().join("no_rays.bin")), "--out", s(&out)]);
+    let r = vlf(&["trace", s(&field), "--rays", s(&dir.path().join("no_rays.bin")), "-o", s(&out)]);
     assert!(r.one_error_line().contains("no_rays.bin"));
 }
 
@@ -722,16 +723,15 @@ fn invalid_flags_are_refused_with_a_clear_message() {
     let out = dir.path().join("out.vlf");
     let bunny = mesh("bunny.obj");
     let bake_with = |flags: &[&str]| run(command().arg("bake").arg(&bunny).arg("-o").arg(&out).args(flags));
-    // Validation errors: exit 1, one line naming the flag and value.
+    // Values out of range are command-line errors too (`conventions.rs` has every flag).
     for (flags, phrase) in [
-        (&["--tiles", "0", "--directions", "33"][..], "--tiles 0"),
-        (&["--directions", "0", "--tiles", "16"], "--directions 0"),
-        (&["--max-depth", "99", "--directions", "33", "--tiles", "16"], "--max-depth 99"),
-        (&["--threads", "0", "--directions", "33", "--tiles", "16"], "--threads"),
+        (&["--tiles", "0", "--directions", "33"][..], "--tiles must be between 1 and 65536, got 0"),
+        (&["--directions", "0", "--tiles", "16"], "--directions must be between 3 and 33554433, got 0"),
+        (&["--max-depth", "99", "--directions", "33", "--tiles", "16"], "--max-depth must be between 0 and 24, got 99"),
+        (&["--threads", "0", "--directions", "33", "--tiles", "16"], "--threads must be between 1 and 1024, got 0"),
     ] {
-        let r = bake_with(flags);
-        let line = r.one_error_line();
-        assert!(line.contains(phrase), "`{}`: {line}", r.what);
+        let r = bake_with(flags).fails_with(2);
+        assert!(r.stderr.starts_with(&format!("error: {phrase}\n")), "`{}`: {}", r.what, r.stderr);
         assert!(!out.exists(), "`{}` wrote a field", r.what);
     }
     // Command-line errors: exit 2, clap's message and usage hint.
@@ -752,8 +752,8 @@ fn invalid_flags_are_refused_with_a_clear_message() {
     }
     // `rays` validates its size.
     let field = bake_bunny(dir.path(), "bunny.vlf");
-    let r = vlf(&["rays", s(&field), "--width", "0", "-o", s(&dir.path().join("r.bin"))]);
-    assert!(r.one_error_line().contains("--width"));
+    let r = vlf(&["rays", s(&field), "--width", "0", "-o", s(&dir.path().join("r.bin"))]).fails_with(2);
+    assert!(r.stderr.starts_with("error: --width must be between 1 and 65535, got 0\n"), "{}", r.stderr);
 }
 
 #[test]
@@ -815,7 +815,8 @@ fn gen_random_is_deterministic_and_bakes() {
     let c = dir.path().join("c.obj");
     for (path, seed) in [(&a, "3"), (&b, "3"), (&c, "4")] {
         let r = vlf(&["gen", "random", "--count", "500", "--seed", seed, "-o", s(path)]).ok();
-        assert_eq!((r.stdout.as_str(), r.stderr.as_str()), ("", ""));
+        assert!(r.stdout.starts_with(&format!("generated 500 random triangles (seed {seed}) into ")), "{}", r.stdout);
+        assert_eq!((r.stdout.lines().count(), r.stderr.as_str()), (1, ""));
     }
     let bytes = std::fs::read(&a).unwrap();
     assert!(std::fs::read(&b).unwrap() == bytes, "same seed, different files");
@@ -945,7 +946,8 @@ fn render_uses_the_fields_gltf_camera_and_lights_and_not_the_thread_count() {
         vlf(&["render", s(&field), "-o", s(&two), "--width", "32", "--view", "inside", "--default-lights", "--json"])
             .ok()
             .json();
-    assert_eq!((&j["camera"], &j["height"]), (&json!("inside (across the scene)"), &json!(480)), "{j}");
+    // One size flag keeps the aspect ratio: 4:3 without a field camera.
+    assert_eq!((&j["camera"], &j["height"]), (&json!("inside (across the scene)"), &json!(24)), "{j}");
     assert_eq!(j["lights"], "default key and fill");
 
     let r = vlf(&["render", s(&field), "-o", s(&two), "--camera", "1"]).fails_with(1);
@@ -960,10 +962,11 @@ fn render_refuses_bad_flags_with_a_clear_message() {
     for (flags, code, says) in [
         (&["--eye", "1,2"][..], 2, "expected 3"),
         (&["--light", "0,0,0,-1"][..], 2, "intensity"),
-        (&["--samples", "0"][..], 1, "--samples"),
-        (&["--max-depth", "65"][..], 1, "--max-depth"),
-        (&["--width", "0"][..], 1, "--width"),
-        (&["--fov", "200", "--eye", "0,0,30"][..], 1, "--fov"),
+        (&["--samples", "0"][..], 2, "--samples must be between 1 and 16, got 0"),
+        (&["--bounces", "65"][..], 2, "--bounces must be between 0 and 64, got 65"),
+        (&["--width", "0"][..], 2, "--width must be between 1 and 65535, got 0"),
+        (&["--fov", "200", "--eye", "0,0,30"][..], 2, "--fov must be between 0 (excluded) and 180 (excluded), got 200"),
+        (&["--eye", "0,0,30", "--target", "0,0,30"][..], 2, "--eye and --target are the same point"),
         (&["--view", "inside", "--camera", "0"][..], 2, "cannot be used with"),
     ] {
         let r = vlf(&[&["render", s(&field), "-o", s(&out)][..], flags].concat()).fails_with(code);
@@ -1007,7 +1010,7 @@ fn output_into_a_closed_pipe_is_success() {
         &["dump", s(&field)],
         &["dump", s(&field), "--json"],
         &["dump", s(&field), "--verify"],
-        &["trace", s(&field), "--rays", s(&rays), "--out", s(&hits)],
+        &["trace", s(&field), "--rays", s(&rays), "-o", s(&hits)],
         &["bake", s(&box_mesh), "-o", s(&box_field), "--directions", "3", "--tiles", "2"],
     ];
     for args in cases {
@@ -1062,7 +1065,7 @@ fn outputs_that_are_fifos_are_written_through_not_replaced() {
         field.as_os_str(),
         OsStr::new("--rays"),
         rays.as_os_str(),
-        OsStr::new("--out"),
+        OsStr::new("-o"),
         fifo.as_os_str(),
     ]);
     assert_eq!(traced.code, 0, "{}", traced.stderr);
@@ -1134,8 +1137,8 @@ fn a_packed_field_dumps_verifies_and_traces_like_the_raw_one() {
     assert!(verified.contains("verify: OK"), "{verified}");
 
     let (raw_hits, packed_hits) = (dir.path().join("raw.hits"), dir.path().join("packed.hits"));
-    vlf(&["trace", s(&field), "--rays", s(&rays), "--out", s(&raw_hits)]).ok();
-    vlf(&["trace", s(&packed), "--rays", s(&rays), "--out", s(&packed_hits)]).ok();
+    vlf(&["trace", s(&field), "--rays", s(&rays), "-o", s(&raw_hits)]).ok();
+    vlf(&["trace", s(&packed), "--rays", s(&rays), "-o", s(&packed_hits)]).ok();
     assert!(std::fs::read(&raw_hits).unwrap() == std::fs::read(&packed_hits).unwrap());
 }
 

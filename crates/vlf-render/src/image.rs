@@ -111,6 +111,19 @@ fn percentile(values: &[u64], q: f64) -> u64 {
     *sorted.select_nth_unstable(k).1
 }
 
+/// An upper bound on the memory of turning a frame of `width × height` pixels into a picture
+/// ([`to_srgb8`], then [`encode_png`], whose output may grow to twice the stored size while it is
+/// written) and, with `work`, into a work picture too ([`work_image`]: the values, a sorted copy
+/// for the percentile, the colours and their PNG), all counted as if alive at once.
+pub fn picture_bytes_at_most(width: u32, height: u32, work: bool) -> u64 {
+    let pixels = width as u64 * height as u64;
+    // Filtered rows of 8-bit RGB, which deflate at worst stores with well under 0.1% added.
+    let rows = (3 * width as u64 + 1) * height as u64;
+    let png = 2 * (rows + rows / 1000 + (64 << 10));
+    let picture = 3 * pixels + png;
+    if work { 2 * picture + 2 * size_of::<u64>() as u64 * pixels } else { picture }
+}
+
 /// A PNG of 8-bit sRGB pixels (RGB, row by row), tagged sRGB.
 pub fn encode_png(width: u32, height: u32, rgb: &[u8]) -> Result<Vec<u8>, png::EncodingError> {
     let mut bytes = Vec::new();
@@ -159,6 +172,22 @@ mod tests {
         let rgb: Vec<u8> = (0..6 * 4 * 3).map(|i| (i * 7) as u8).collect();
         let png = encode_png(6, 4, &rgb).unwrap();
         assert_eq!(decode_png(&png).unwrap(), (6, 4, rgb));
+    }
+
+    #[test]
+    fn noise_fits_the_memory_bound_of_a_picture() {
+        let (w, h) = (97u32, 61u32);
+        let mut state = 1u64;
+        let rgb: Vec<u8> = (0..w * h * 3)
+            .map(|_| {
+                state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                (state >> 56) as u8
+            })
+            .collect();
+        let png = encode_png(w, h, &rgb).unwrap();
+        let bound = picture_bytes_at_most(w, h, false);
+        assert!((rgb.len() + 2 * png.len()) as u64 <= bound, "{} + 2 × {} > {bound}", rgb.len(), png.len());
+        assert!(picture_bytes_at_most(w, h, true) > 2 * bound);
     }
 
     #[test]

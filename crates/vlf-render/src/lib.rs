@@ -21,9 +21,9 @@
 //! let field = Field::open("scene.vlf")?;
 //! let scene = Scene::from_field(&field, &SceneOptions::default());
 //! let settings = Settings::default();
-//! let (center, radius) = field.bounding_sphere();
-//! let view = View::outside(center, radius, settings.width as f64 / settings.height as f64);
-//! let lights = default_lights(&view, center, radius);
+//! let bounds = SceneBounds::of(&field);
+//! let view = View::outside(&bounds, settings.width as f64 / settings.height as f64);
+//! let lights = default_lights(&view, bounds.center, bounds.radius);
 //! let frame = render(&field, &scene, &view, &lights, &settings, &|_| {});
 //! let png = encode_png(frame.width, frame.height, &to_srgb8(&frame, 1.0))?;
 //! std::fs::write("scene.png", png)?;
@@ -34,6 +34,7 @@
 
 #![forbid(unsafe_code)]
 
+mod framing;
 mod image;
 mod light;
 mod math;
@@ -42,9 +43,9 @@ mod scene;
 pub mod setup;
 mod view;
 
-pub use image::{WorkImage, WorkMetric, decode_png, encode_png, inferno, to_srgb8, work_image};
+pub use image::{WorkImage, WorkMetric, decode_png, encode_png, inferno, picture_bytes_at_most, to_srgb8, work_image};
 pub use light::{Emitter, Light, default_lights};
 pub use math::V3;
 pub use render::{Background, Frame, MAX_BOUNCES, RayCounts, Settings, render};
 pub use scene::{Scene, SceneOptions, Surface};
-pub use view::View;
+pub use view::{SceneBounds, View};

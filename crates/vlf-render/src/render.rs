@@ -95,6 +95,15 @@ pub struct Frame {
     pub total_work: TraceStats,
 }
 
+impl Frame {
+    /// The bytes of a frame of `width × height` pixels: the colours and the work counts that
+    /// [`render`] allocates before it traces, for a caller to check against the memory it has.
+    pub fn bytes(width: u32, height: u32) -> u64 {
+        let per_pixel = (size_of::<[f32; 3]>() + size_of::<TraceStats>()) as u64;
+        (width as u64 * height as u64).saturating_mul(per_pixel)
+    }
+}
+
 /// The largest `max_depth` honoured: rays are traced by recursion, and facing mirrors or total
 /// internal reflection keep a ray's weight up, so the depth alone bounds the stack.
 pub const MAX_BOUNCES: u32 = 64;

@@ -3,21 +3,41 @@
 //!
 //! **Camera** ([`choose_camera`]): the field's camera `N` if asked for by number; else a framing
 //! if one is asked for; else a pinhole at a given eye point; else the field's first camera if it
-//! has any; else a framing of the whole scene from outside. The image height, unless given,
-//! follows a field camera's aspect ratio (else 480 pixels).
+//! has any; else a framing of the whole scene from outside ([`View::outside`]).
+//!
+//! **Size** ([`image_size`]): the width and height given; one of them alone, the other from the
+//! aspect ratio of a field camera, else 4:3; neither, 640 pixels wide.
 //!
 //! **Lights** ([`choose_lights`]): the lights given by hand if any; else the field's own lights,
 //! unless the defaults are asked for or it has none; else a key and a fill light around the camera
 //! ([`default_lights`]).
 
 use crate::light::{Light, default_lights};
-use crate::math::V3;
-use crate::view::View;
+use crate::math::{V3, cross, length, normalize, sub};
+use crate::view::{SceneBounds, View};
 use std::fmt;
 use vlf_runtime::{CameraProjection, SceneCamera, SceneLight};
 
-/// The image height when neither the user nor a field camera's aspect ratio gives one.
+/// The image width when no size is given.
+pub const DEFAULT_WIDTH: u32 = 640;
+/// The image height when no size is given and no field camera has an aspect ratio.
 pub const DEFAULT_HEIGHT: u32 = 480;
+/// The largest image side [`image_size`] computes.
+pub const MAX_SIDE: u32 = 65_535;
+
+/// The image size for a `width` and a `height` each given or not, and the aspect ratio (`width /
+/// height`) of the camera, if it has one: both given, as given; one, the other from the aspect
+/// ratio (else 4:3), rounded, within 1 to [`MAX_SIDE`]; neither, [`DEFAULT_WIDTH`] wide.
+pub fn image_size(width: Option<u32>, height: Option<u32>, aspect: Option<f64>) -> (u32, u32) {
+    let aspect = aspect.filter(|r| r.is_finite() && *r > 0.0).unwrap_or(DEFAULT_WIDTH as f64 / DEFAULT_HEIGHT as f64);
+    let side = |v: f64| (v.round().clamp(1.0, MAX_SIDE as f64)) as u32;
+    match (width, height) {
+        (Some(w), Some(h)) => (w, h),
+        (Some(w), None) => (w, side(w as f64 / aspect)),
+        (None, Some(h)) => (side(h as f64 * aspect), h),
+        (None, None) => (DEFAULT_WIDTH, side(DEFAULT_WIDTH as f64 / aspect)),
+    }
+}
 
 /// A framing of the scene's bounding sphere (the paper's two viewpoints).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -44,15 +64,16 @@ pub struct CameraRequest {
     /// The vertical field of view of an `eye` camera, in degrees.
     pub fov_degrees: f64,
     /// The image width in pixels.
-    pub width: u32,
+    pub width: Option<u32>,
     /// The image height in pixels.
     pub height: Option<u32>,
 }
 
-/// The camera chosen, the image height that goes with it, and what it is, in words.
+/// The camera chosen, the image size that goes with it, and what it is, in words.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CameraChoice {
     pub view: View,
+    pub width: u32,
     pub height: u32,
     /// `field camera 0 "name"`, `eye [..] looking at [..]`, `outside (framing the scene)`, ...
     pub description: String,
@@ -67,6 +88,8 @@ pub enum CameraError {
     Degenerate { index: usize },
     /// An eye camera was asked to look at its own position.
     EyeIsTarget,
+    /// An eye camera's up direction is zero or along its line of sight: it gives no image up.
+    UpAlongSight,
 }
 
 impl fmt::Display for CameraError {
@@ -75,6 +98,7 @@ impl fmt::Display for CameraError {
             CameraError::NoSuchCamera { index, count } => write!(f, "camera {index}: the field has {count} camera(s)"),
             CameraError::Degenerate { index } => write!(f, "camera {index} cannot be used: its frame is degenerate"),
             CameraError::EyeIsTarget => write!(f, "the eye and the target are the same point"),
+            CameraError::UpAlongSight => write!(f, "the up direction is zero or along the line of sight"),
         }
     }
 }
@@ -82,13 +106,13 @@ impl fmt::Display for CameraError {
 impl std::error::Error for CameraError {}
 
 /// Chooses the camera for `request` (see the module documentation) among the field's `cameras`,
-/// for the scene's bounding sphere (`center`, `radius`).
+/// for the scene's `bounds`.
 pub fn choose_camera(
     request: &CameraRequest,
     cameras: &[SceneCamera<'_>],
-    center: V3,
-    radius: f64,
+    bounds: &SceneBounds,
 ) -> Result<CameraChoice, CameraError> {
+    let center = bounds.center;
     let field_camera = match (request.camera, request.framing, request.eye) {
         (Some(n), _, _) => Some(n),
         (None, None, None) if !cameras.is_empty() => Some(0),
@@ -101,11 +125,7 @@ pub fn choose_camera(
         CameraProjection::Perspective { aspect_ratio, .. } => aspect_ratio.map(f64::from),
         CameraProjection::Orthographic { xmag, ymag } => Some(xmag as f64 / ymag as f64),
     });
-    let width = request.width;
-    let height = request.height.unwrap_or_else(|| match camera_aspect {
-        Some(r) if r.is_finite() && r > 0.0 => ((width as f64 / r).round() as u32).clamp(1, 1 << 16),
-        _ => DEFAULT_HEIGHT,
-    });
+    let (width, height) = image_size(request.width, request.height, camera_aspect);
     let aspect = width as f64 / height as f64;
     let (view, description) = match (chosen, request.eye) {
         (Some((n, c)), _) => {
@@ -117,15 +137,20 @@ pub fn choose_camera(
             if eye == target {
                 return Err(CameraError::EyeIsTarget);
             }
+            let sight = normalize(sub(target, eye));
+            let across = sight.zip(normalize(request.up)).map(|(s, u)| length(cross(s, u)));
+            if across.filter(|&a| a > 1e-9).is_none() {
+                return Err(CameraError::UpAlongSight);
+            }
             let view = View::look_at(eye, target, request.up, request.fov_degrees, aspect);
             (view, format!("eye {eye:?} looking at {target:?}"))
         }
         (None, None) => match request.framing.unwrap_or(Framing::Outside) {
-            Framing::Outside => (View::outside(center, radius, aspect), "outside (framing the scene)".to_string()),
-            Framing::Inside => (View::inside(center, radius, aspect), "inside (across the scene)".to_string()),
+            Framing::Outside => (View::outside(bounds, aspect), "outside (framing the scene)".to_string()),
+            Framing::Inside => (View::inside(bounds, aspect), "inside (across the scene)".to_string()),
         },
     };
-    Ok(CameraChoice { view, height, description })
+    Ok(CameraChoice { view, width, height, description })
 }
 
 /// The lights chosen, and where they came from, in words.
@@ -165,6 +190,8 @@ mod tests {
 
     const CENTER: V3 = [0.0, 1.0, 0.0];
     const RADIUS: f64 = 2.0;
+    const BOUNDS: SceneBounds =
+        SceneBounds { center: CENTER, radius: RADIUS, min: [-1.0, 0.0, -1.0], max: [1.0, 2.0, 1.0] };
 
     fn request() -> CameraRequest {
         CameraRequest {
@@ -174,7 +201,7 @@ mod tests {
             target: None,
             up: [0.0, 1.0, 0.0],
             fov_degrees: 50.0,
-            width: 640,
+            width: Some(640),
             height: None,
         }
     }
@@ -201,64 +228,84 @@ mod tests {
     #[test]
     fn without_flags_the_fields_first_camera_is_used_and_sets_the_height() {
         let cameras = [camera("front", perspective(Some(2.0))), camera("back", perspective(None))];
-        let c = choose_camera(&request(), &cameras, CENTER, RADIUS).unwrap();
+        let c = choose_camera(&request(), &cameras, &BOUNDS).unwrap();
         assert_eq!(c.description, "field camera 0 \"front\"");
         assert_eq!(c.height, 320, "640 wide at the camera's aspect ratio of 2");
         assert_eq!(c.view, View::from_scene_camera(&cameras[0], 2.0).unwrap());
         // An orthographic camera's aspect is xmag / ymag; a given height wins.
         let ortho = [camera("plan", CameraProjection::Orthographic { xmag: 4.0, ymag: 1.0 })];
-        assert_eq!(choose_camera(&request(), &ortho, CENTER, RADIUS).unwrap().height, 160);
+        assert_eq!(choose_camera(&request(), &ortho, &BOUNDS).unwrap().height, 160);
         let given = CameraRequest { height: Some(100), ..request() };
-        assert_eq!(choose_camera(&given, &ortho, CENTER, RADIUS).unwrap().height, 100);
+        assert_eq!(choose_camera(&given, &ortho, &BOUNDS).unwrap().height, 100);
     }
 
     #[test]
     fn a_camera_number_picks_that_camera_and_a_missing_one_is_an_error() {
         let cameras = [camera("front", perspective(None)), camera("back", perspective(None))];
         let second = CameraRequest { camera: Some(1), ..request() };
-        let c = choose_camera(&second, &cameras, CENTER, RADIUS).unwrap();
+        let c = choose_camera(&second, &cameras, &BOUNDS).unwrap();
         assert_eq!(c.description, "field camera 1 \"back\"");
         assert_eq!(c.height, DEFAULT_HEIGHT, "no aspect ratio in the camera: the default height");
         let third = CameraRequest { camera: Some(2), ..request() };
-        assert_eq!(
-            choose_camera(&third, &cameras, CENTER, RADIUS),
-            Err(CameraError::NoSuchCamera { index: 2, count: 2 })
-        );
+        assert_eq!(choose_camera(&third, &cameras, &BOUNDS), Err(CameraError::NoSuchCamera { index: 2, count: 2 }));
         let mut flat = camera("flat", perspective(None));
         flat.forward = [0.0; 3];
-        assert_eq!(choose_camera(&request(), &[flat], CENTER, RADIUS), Err(CameraError::Degenerate { index: 0 }));
+        assert_eq!(choose_camera(&request(), &[flat], &BOUNDS), Err(CameraError::Degenerate { index: 0 }));
     }
 
     #[test]
     fn a_framing_or_an_eye_overrides_the_fields_cameras() {
         let cameras = [camera("front", perspective(Some(2.0)))];
         let inside = CameraRequest { framing: Some(Framing::Inside), ..request() };
-        let c = choose_camera(&inside, &cameras, CENTER, RADIUS).unwrap();
+        let c = choose_camera(&inside, &cameras, &BOUNDS).unwrap();
         assert_eq!(c.description, "inside (across the scene)");
         assert_eq!(c.height, DEFAULT_HEIGHT);
-        assert_eq!(c.view, View::inside(CENTER, RADIUS, 640.0 / 480.0));
+        assert_eq!(c.view, View::inside(&BOUNDS, 640.0 / 480.0));
 
         let eye = CameraRequest { eye: Some([3.0, 1.0, 0.0]), ..request() };
-        let c = choose_camera(&eye, &cameras, CENTER, RADIUS).unwrap();
+        let c = choose_camera(&eye, &cameras, &BOUNDS).unwrap();
         assert_eq!(
             c.description, "eye [3.0, 1.0, 0.0] looking at [0.0, 1.0, 0.0]",
             "the target defaults to the centre"
         );
         assert_eq!(c.view, View::look_at([3.0, 1.0, 0.0], CENTER, [0.0, 1.0, 0.0], 50.0, 640.0 / 480.0));
         let same = CameraRequest { eye: Some(CENTER), ..request() };
-        assert_eq!(choose_camera(&same, &cameras, CENTER, RADIUS), Err(CameraError::EyeIsTarget));
+        assert_eq!(choose_camera(&same, &cameras, &BOUNDS), Err(CameraError::EyeIsTarget));
+        // An up direction along the line of sight (either way) gives no image up.
+        for up in [[0.0, 1.0, 0.0], [0.0, -3.0, 0.0], [0.0, 0.0, 0.0]] {
+            let above = CameraRequest { eye: Some([0.0, 9.0, 0.0]), up, ..request() };
+            assert_eq!(choose_camera(&above, &cameras, &BOUNDS), Err(CameraError::UpAlongSight), "{up:?}");
+        }
+        let tilted = CameraRequest { eye: Some([0.0, 9.0, 0.0]), up: [0.0, 0.0, -1.0], ..request() };
+        assert!(choose_camera(&tilted, &cameras, &BOUNDS).is_ok());
+    }
+
+    #[test]
+    fn one_size_keeps_the_aspect_ratio_and_none_gives_640_by_480() {
+        let four_by_three = None;
+        assert_eq!(image_size(None, None, four_by_three), (640, 480));
+        assert_eq!(image_size(Some(800), None, four_by_three), (800, 600));
+        assert_eq!(image_size(None, Some(300), four_by_three), (400, 300));
+        assert_eq!(image_size(Some(100), Some(700), four_by_three), (100, 700));
+        assert_eq!(image_size(None, Some(300), Some(2.0)), (600, 300));
+        assert_eq!(image_size(Some(48), None, Some(f64::NAN)), (48, 36));
+        assert_eq!(image_size(Some(65_535), None, Some(1e-9)), (65_535, MAX_SIDE));
+        assert_eq!(image_size(None, Some(1), Some(1e-9)), (1, 1));
+        let wide = CameraRequest { width: None, height: Some(300), ..request() };
+        let c = choose_camera(&wide, &[], &BOUNDS).unwrap();
+        assert_eq!((c.width, c.height), (400, 300));
     }
 
     #[test]
     fn without_cameras_or_flags_the_scene_is_framed_from_outside() {
-        let c = choose_camera(&request(), &[], CENTER, RADIUS).unwrap();
+        let c = choose_camera(&request(), &[], &BOUNDS).unwrap();
         assert_eq!(c.description, "outside (framing the scene)");
-        assert_eq!(c.view, View::outside(CENTER, RADIUS, 640.0 / 480.0));
+        assert_eq!(c.view, View::outside(&BOUNDS, 640.0 / 480.0));
     }
 
     #[test]
     fn lights_by_hand_win_then_the_fields_then_the_defaults() {
-        let view = View::outside(CENTER, RADIUS, 1.0);
+        let view = View::outside(&BOUNDS, 1.0);
         let lamp = SceneLight {
             name: "lamp",
             kind: LightKind::Point,

@@ -2,9 +2,37 @@
 //! the benchmarks) or an orthographic view, placed by flags, by a framing rule, or by a glTF
 //! camera the field carries.
 
+use crate::framing::{self, OUTSIDE_FOV_DEGREES};
 use crate::math::{V3, cross, madd, normalize, widen};
 use vlf_geom::{Camera, Ray};
-use vlf_runtime::{CameraProjection, SceneCamera};
+use vlf_runtime::{CameraProjection, Field, SceneCamera};
+
+/// Where a scene is: its bounding sphere and its box, as a field stores them
+/// (`Field::bounding_sphere`, `Field::bounds`). The framings of [`View::outside`] and
+/// [`View::inside`] are computed from it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SceneBounds {
+    pub center: V3,
+    pub radius: f64,
+    /// The corners of the box around every vertex.
+    pub min: V3,
+    pub max: V3,
+}
+
+impl SceneBounds {
+    /// The bounds `field` stores.
+    pub fn of(field: &Field) -> SceneBounds {
+        let ((center, radius), (min, max)) = (field.bounding_sphere(), field.bounds());
+        SceneBounds { center, radius, min, max }
+    }
+
+    /// The bounds of the box `min..max`, with the sphere around it.
+    pub fn of_box(min: V3, max: V3) -> SceneBounds {
+        let center = std::array::from_fn(|i| (min[i] + max[i]) / 2.0);
+        let radius = crate::math::length(crate::math::sub(max, min)) / 2.0;
+        SceneBounds { center, radius, min, max }
+    }
+}
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Projection {
@@ -50,15 +78,28 @@ impl View {
         View::pinhole(Camera::look_at(eye, target, up, vfov_degrees, aspect))
     }
 
-    /// The paper's outside viewpoint (`vlf-bake rays --view outside`): the whole bounding sphere
-    /// in view.
-    pub fn outside(center: V3, radius: f64, aspect: f64) -> View {
-        View::pinhole(Camera::outside(center, radius, aspect))
+    /// The outside viewpoint (`vlf-bake rays --view outside`, the default of `render`): from the
+    /// paper's direction, the scene's whole box in view in both directions of the picture, close
+    /// up (`crate::framing`; a very thin box is seen along an axis). A damaged field's box falls
+    /// back on its bounding sphere, framed in both directions too.
+    pub fn outside(bounds: &SceneBounds, aspect: f64) -> View {
+        match framing::outside(bounds.min, bounds.max, aspect) {
+            Some(p) => View::look_at(p.eye, p.target, p.up, OUTSIDE_FOV_DEGREES, aspect),
+            None => {
+                // The paper's distance, 2.5 radii, where the sphere subtends asin(1/2.5); the
+                // narrower of the two fields of view must hold it, with the same border.
+                let camera = Camera::outside(bounds.center, bounds.radius, aspect);
+                let half = (1.0f64 / 2.5).asin().tan() / 0.95 / aspect.min(1.0);
+                let vfov = 2.0 * half.atan().to_degrees();
+                View::look_at(camera.eye, bounds.center, [0.0, 1.0, 0.0], vfov, aspect)
+            }
+        }
     }
 
-    /// The paper's inside viewpoint (`vlf-bake rays --view inside`; its Figure 5, right).
-    pub fn inside(center: V3, radius: f64, aspect: f64) -> View {
-        View::pinhole(Camera::inside(center, radius, aspect))
+    /// The paper's inside viewpoint (`vlf-bake rays --view inside`; its Figure 5, right): near the
+    /// centre of the bounding sphere, looking across the scene.
+    pub fn inside(bounds: &SceneBounds, aspect: f64) -> View {
+        View::pinhole(Camera::inside(bounds.center, bounds.radius, aspect))
     }
 
     /// A camera of the field for an image of aspect `width / height` (a perspective camera's own

@@ -1,10 +1,16 @@
 /*
  * The C API from C: layouts, error codes and messages, null and range checks, open from memory,
- * provenance, and queries from several threads at once. Run by tests/c_programs.rs as
+ * provenance, queries from several threads at once, what a field says about itself (format
+ * version, bounds, parameters, packing), materials, cameras and lights, and opening with a cap on
+ * a packed field's decoded size. Run by tests/c_programs.rs as
  *
- *   api_test FIELD TRIANGLES CONTENT_HASH_HEX INPUT_NAME VERSION
+ *   api_test FIELD TRIANGLES CONTENT_HASH_HEX INPUT_NAME VERSION FORMAT DIRECTIONS TILES
+ *            SCENE MATERIALS CAMERAS LIGHTS CAMERA0_NAME MATERIAL_OF_0 PACKED UNPACKED_BYTES
  *
- * with the facts the Rust API reports about FIELD. Prints each failed check and a closing
+ * with the facts the Rust API reports: FIELD a field of one OBJ without materials, baked with
+ * DIRECTIONS directions and TILES tiles, of format version FORMAT ("1.1"); SCENE a field of a glTF
+ * with materials, cameras and lights, MATERIAL_OF_0 the material index of its triangle 0; PACKED
+ * FIELD packed, which decodes to UNPACKED_BYTES. Prints each failed check and a closing
  * "api_test: N passed, N failed" line; exits 0 only if every check passed.
  */
 
@@ -29,7 +35,12 @@ _Static_assert(offsetof(VlfHit, u) == 8 && offsetof(VlfHit, v) == 12, "VlfHit la
 _Static_assert(sizeof(VlfStatus) == 4, "VlfStatus is an int32_t");
 _Static_assert(VLF_OK == 0 && VLF_ERR_NULL_ARGUMENT == 1 && VLF_ERR_INVALID_ARGUMENT == 2, "stable codes");
 _Static_assert(VLF_ERR_IO == 3 && VLF_ERR_FORMAT == 4 && VLF_ERR_INTERNAL == 5, "stable codes");
-_Static_assert(VLF_ERR_OUT_OF_MEMORY == 6, "stable codes");
+_Static_assert(VLF_ERR_OUT_OF_MEMORY == 6 && VLF_ERR_LIMIT == 7, "stable codes");
+_Static_assert(VLF_AUTOMATIC == 0, "requested parameters: 0 = automatic");
+_Static_assert(VLF_CAMERA_PERSPECTIVE == 1 && VLF_CAMERA_ORTHOGRAPHIC == 2, "camera kinds of formats/vlf.md");
+_Static_assert(VLF_LIGHT_POINT == 1 && VLF_LIGHT_SPOT == 2 && VLF_LIGHT_DIRECTIONAL == 3, "light kinds");
+_Static_assert(sizeof(VlfParameters) == 56 && offsetof(VlfParameters, lattice_n) == 24, "VlfParameters layout");
+_Static_assert(sizeof(VlfOpenOptions) == 8, "VlfOpenOptions layout");
 _Static_assert(VLF_NO_PRIM == 0xFFFFFFFFu && VLF_NO_INDEX == 0xFFFFFFFFu, "miss and absent-index markers");
 
 static int passed, failed;
@@ -125,6 +136,153 @@ static void *trace_worker(void *arg) {
     return NULL;
 }
 
+/* Format version, bounds, parameters and packing of FIELD (argv as main's). */
+static void about_the_field(const VlfField *field, char **argv) {
+    uint16_t major = 0, minor = 0;
+    double lo[3], hi[3], center[3], radius = 0.0, both[5];
+    uint8_t packed = 7;
+    VlfParameters p;
+    char version[16];
+    int i;
+
+    CHECK(vlf_format_version(field, &major, &minor) == VLF_OK);
+    snprintf(version, sizeof version, "%u.%u", (unsigned)major, (unsigned)minor);
+    CHECK(strcmp(version, argv[6]) == 0);
+    CHECK(vlf_format_version(field, NULL, &minor) == VLF_ERR_NULL_ARGUMENT && message_has("`major` is null"));
+    CHECK(vlf_format_version(field, &major, &major) == VLF_ERR_INVALID_ARGUMENT && message_has("overlap"));
+    CHECK(vlf_format_version(NULL, &major, &minor) == VLF_ERR_NULL_ARGUMENT);
+
+    /* The box lies inside the bounding sphere and is not empty. */
+    CHECK(vlf_bounds(field, lo, hi) == VLF_OK && vlf_bounding_sphere(field, center, &radius) == VLF_OK);
+    for (i = 0; i < 3; i++) {
+        CHECK(lo[i] < hi[i] && lo[i] >= center[i] - radius && hi[i] <= center[i] + radius);
+    }
+    CHECK(vlf_bounds(field, both, both + 2) == VLF_ERR_INVALID_ARGUMENT && message_has("overlap"));
+    CHECK(vlf_bounds(field, lo, NULL) == VLF_ERR_NULL_ARGUMENT && message_has("`max` is null"));
+
+    CHECK(vlf_is_packed(field, &packed) == VLF_OK && packed == 0);
+    CHECK(vlf_is_packed(field, NULL) == VLF_ERR_NULL_ARGUMENT);
+
+    memset(&p, 0xff, sizeof p);
+    CHECK(vlf_parameters(field, &p) == VLF_OK);
+    CHECK(p.directions == (uint32_t)strtoul(argv[7], NULL, 10) && p.requested_directions == p.directions);
+    CHECK(p.tiles == (uint32_t)strtoul(argv[8], NULL, 10) && p.requested_tiles == p.tiles);
+    CHECK(p.directions == 2 * p.lattice_n * p.lattice_n + 1 && p.leaf_size >= 1 && p.max_depth <= 24);
+    CHECK(p.margin > 0.0 && p.margin < radius && p.max_bytes > 0 && p.max_bytes_per_triangle > 0 && p.reserved == 0);
+    CHECK(vlf_parameters(field, NULL) == VLF_ERR_NULL_ARGUMENT && message_has("`parameters` is null"));
+    CHECK(vlf_parameters(field, (VlfParameters *)(void *)((char *)&p + 4)) == VLF_ERR_INVALID_ARGUMENT &&
+          message_has("not aligned"));
+}
+
+/* Materials, cameras and lights of SCENE; FIELD has none. */
+static void scene(char **argv) {
+    VlfField *field = NULL, *plain = NULL;
+    uint32_t count = 99, index = 0, triangles = 0, with_material = 0, i;
+    VlfMaterial m;
+    VlfCamera c;
+    VlfLight l;
+
+    CHECK(vlf_open_path(argv[1], &plain) == VLF_OK);
+    CHECK(vlf_material_count(plain, &count) == VLF_OK && count == 0);
+    CHECK(vlf_camera_count(plain, &count) == VLF_OK && count == 0);
+    CHECK(vlf_light_count(plain, &count) == VLF_OK && count == 0);
+    CHECK(vlf_triangle_material(plain, 0, &index) == VLF_OK && index == VLF_NO_INDEX);
+    CHECK(vlf_material(plain, 0, &m) == VLF_ERR_INVALID_ARGUMENT && message_has("the field has 0 materials"));
+    CHECK(vlf_camera(plain, 0, &c) == VLF_ERR_INVALID_ARGUMENT && message_has("the field has 0 cameras"));
+    CHECK(vlf_light(plain, 0, &l) == VLF_ERR_INVALID_ARGUMENT && message_has("the field has 0 lights"));
+    vlf_close(plain);
+
+    CHECK(vlf_open_path(argv[9], &field) == VLF_OK && field != NULL);
+    if (field == NULL) {
+        return;
+    }
+    CHECK(vlf_material_count(field, &count) == VLF_OK && count == (uint32_t)strtoul(argv[10], NULL, 10));
+    for (i = 0; i < count; i++) {
+        CHECK(vlf_material(field, i, &m) == VLF_OK && m.name != NULL && m.ior > 0.0f && m.shininess >= 0.0f);
+    }
+    CHECK(vlf_material(field, count, &m) == VLF_ERR_INVALID_ARGUMENT && message_has("out of range"));
+    CHECK(vlf_material(field, 0, NULL) == VLF_ERR_NULL_ARGUMENT && message_has("`material` is null"));
+    CHECK(vlf_material_count(field, NULL) == VLF_ERR_NULL_ARGUMENT);
+    CHECK(vlf_triangle_count(field, &triangles) == VLF_OK);
+    CHECK(vlf_triangle_material(field, 0, &index) == VLF_OK && index == (uint32_t)strtoul(argv[14], NULL, 10));
+    for (i = 0; i < triangles; i++) {
+        index = 0;
+        CHECK(vlf_triangle_material(field, i, &index) == VLF_OK && (index < count || index == VLF_NO_INDEX));
+        with_material += index != VLF_NO_INDEX;
+    }
+    CHECK(with_material > 0);
+    CHECK(vlf_triangle_material(field, triangles, &index) == VLF_ERR_INVALID_ARGUMENT && message_has("out of range"));
+    CHECK(vlf_triangle_material(field, 0, NULL) == VLF_ERR_NULL_ARGUMENT);
+
+    CHECK(vlf_camera_count(field, &count) == VLF_OK && count == (uint32_t)strtoul(argv[11], NULL, 10));
+    CHECK(count > 0 && vlf_camera(field, 0, &c) == VLF_OK);
+    CHECK(c.name_len == strlen(argv[13]) && memcmp(c.name, argv[13], c.name_len) == 0);
+    CHECK(c.projection == VLF_CAMERA_PERSPECTIVE && c.yfov > 0.0f && c.yfov < 3.2f && c.xmag == 0.0f);
+    CHECK(fabs(c.forward[0] * c.forward[0] + c.forward[1] * c.forward[1] + c.forward[2] * c.forward[2] - 1.0) < 1e-3);
+    CHECK(fabs(c.forward[0] * c.up[0] + c.forward[1] * c.up[1] + c.forward[2] * c.up[2]) < 1e-3);
+    CHECK(c.znear >= 0.0f && (c.zfar == 0.0f || c.zfar > c.znear));
+    CHECK(vlf_camera(field, count, &c) == VLF_ERR_INVALID_ARGUMENT && message_has("cameras"));
+    CHECK(vlf_camera(field, 0, NULL) == VLF_ERR_NULL_ARGUMENT);
+    CHECK(vlf_camera_count(NULL, &count) == VLF_ERR_NULL_ARGUMENT);
+
+    CHECK(vlf_light_count(field, &count) == VLF_OK && count == (uint32_t)strtoul(argv[12], NULL, 10));
+    for (i = 0; i < count; i++) {
+        CHECK(vlf_light(field, i, &l) == VLF_OK && l.kind >= VLF_LIGHT_POINT && l.kind <= VLF_LIGHT_DIRECTIONAL);
+        CHECK(l.intensity > 0.0f && l.range >= 0.0f && (l.kind == VLF_LIGHT_SPOT || l.outer_cone == 0.0f));
+    }
+    CHECK(vlf_light(field, count, &l) == VLF_ERR_INVALID_ARGUMENT && message_has("lights"));
+    CHECK(vlf_light(field, 0, (VlfLight *)(void *)((char *)&l + 1)) == VLF_ERR_INVALID_ARGUMENT);
+    CHECK(vlf_light_count(field, NULL) == VLF_ERR_NULL_ARGUMENT);
+    vlf_close(field);
+}
+
+/* PACKED opened with and without a cap on its decoded size, from its path and from memory. */
+static void packed_with_a_cap(char **argv) {
+    VlfField *field = (VlfField *)&argv;
+    VlfOpenOptions options;
+    uint64_t unpacked = strtoull(argv[16], NULL, 10);
+    uint8_t packed = 0;
+    void *bytes;
+    size_t len = 0;
+
+    options.max_unpacked_bytes = unpacked - 1;
+    CHECK(vlf_open_path_ex(argv[15], &options, &field) == VLF_ERR_LIMIT && field == NULL &&
+          message_has("vlf_open_path_ex") && message_has("more than the limit"));
+    options.max_unpacked_bytes = unpacked;
+    CHECK(vlf_open_path_ex(argv[15], &options, &field) == VLF_OK && field != NULL);
+    CHECK(vlf_is_packed(field, &packed) == VLF_OK && packed == 1);
+    vlf_close(field);
+    field = NULL;
+    CHECK(vlf_open_path_ex(argv[15], NULL, &field) == VLF_OK && field != NULL);
+    vlf_close(field);
+    options.max_unpacked_bytes = 0; /* no cap */
+    CHECK(vlf_open_path_ex(argv[15], &options, &field) == VLF_OK);
+    vlf_close(field);
+    /* A raw field is not decoded: a cap does not apply to it. */
+    options.max_unpacked_bytes = 1;
+    CHECK(vlf_open_path_ex(argv[1], &options, &field) == VLF_OK);
+    vlf_close(field);
+    CHECK(vlf_open_path_ex(NULL, &options, &field) == VLF_ERR_NULL_ARGUMENT && field == NULL);
+    CHECK(vlf_open_path_ex(argv[15], (const VlfOpenOptions *)(const void *)((const char *)&options + 1), &field) ==
+              VLF_ERR_INVALID_ARGUMENT &&
+          message_has("`options` is not aligned"));
+
+    bytes = read_all(argv[15], &len);
+    CHECK(bytes != NULL);
+    if (bytes != NULL) {
+        options.max_unpacked_bytes = unpacked - 1;
+        CHECK(vlf_open_memory_ex(bytes, len, &options, &field) == VLF_ERR_LIMIT && field == NULL &&
+              message_has("vlf_open_memory_ex"));
+        options.max_unpacked_bytes = unpacked;
+        CHECK(vlf_open_memory_ex(bytes, len, &options, &field) == VLF_OK && field != NULL);
+        CHECK(vlf_is_packed(field, &packed) == VLF_OK && packed == 1);
+        vlf_close(field);
+        CHECK(vlf_open_memory_ex(NULL, len, NULL, &field) == VLF_ERR_NULL_ARGUMENT);
+        CHECK(vlf_open_memory_ex(bytes, len, NULL, NULL) == VLF_ERR_NULL_ARGUMENT);
+        free(bytes);
+    }
+}
+
 int main(int argc, char **argv) {
     VlfField *field = NULL, *from_memory = NULL;
     uint32_t triangles = 0, expected_triangles;
@@ -142,8 +300,9 @@ int main(int argc, char **argv) {
     /* A buffer aligned for VlfRay, to build a misaligned pointer into. */
     alignas(8) unsigned char raw[sizeof(VlfRay) + 8];
 
-    if (argc != 6) {
-        fprintf(stderr, "usage: api_test FIELD TRIANGLES CONTENT_HASH_HEX INPUT_NAME VERSION\n");
+    if (argc != 17) {
+        fprintf(stderr, "usage: api_test FIELD TRIANGLES CONTENT_HASH_HEX INPUT_NAME VERSION FORMAT DIRECTIONS "
+                        "TILES SCENE MATERIALS CAMERAS LIGHTS CAMERA0_NAME MATERIAL_OF_0 PACKED UNPACKED_BYTES\n");
         return 2;
     }
     expected_triangles = (uint32_t)strtoul(argv[2], NULL, 10);
@@ -153,6 +312,7 @@ int main(int argc, char **argv) {
     CHECK(strcmp(vlf_status_name(VLF_ERR_IO), "VLF_ERR_IO") == 0);
     CHECK(strcmp(vlf_status_name(VLF_OK), "VLF_OK") == 0);
     CHECK(strcmp(vlf_status_name(VLF_ERR_OUT_OF_MEMORY), "VLF_ERR_OUT_OF_MEMORY") == 0);
+    CHECK(strcmp(vlf_status_name(VLF_ERR_LIMIT), "VLF_ERR_LIMIT") == 0);
     CHECK(strcmp(vlf_status_name(-1), "unknown status") == 0);
     CHECK(strcmp(vlf_last_error_message(), "") == 0);
 
@@ -277,6 +437,10 @@ int main(int argc, char **argv) {
         /* The workers' failures did not touch this thread's message. */
         CHECK(message_has("vlf_triangle_count: argument `field` is null"));
     }
+
+    about_the_field(field, argv);
+    scene(argv);
+    packed_with_a_cap(argv);
 
     vlf_close(from_memory);
     vlf_close(field);

@@ -50,14 +50,17 @@ pub fn run(a: &DemoArgs) -> Result<()> {
             field: field_path.clone(),
             output: rays_path.clone(),
             view,
-            width: 512,
-            height: 512,
+            width: Some(512),
+            height: Some(512),
+            quiet: true,
+            json: false,
         })?;
         super::trace::run(&TraceArgs {
             field: field_path.clone(),
             rays: rays_path,
-            out: hits_path,
+            output: hits_path,
             any_hit: false,
+            quiet: false,
             json: false,
             threads: None,
         })?;
@@ -67,7 +70,7 @@ pub fn run(a: &DemoArgs) -> Result<()> {
     super::render::run(&RenderArgs {
         field: field_path,
         output: picture.clone(),
-        width: 640,
+        width: None,
         height: None,
         view: None,
         camera: None,
@@ -77,7 +80,7 @@ pub fn run(a: &DemoArgs) -> Result<()> {
         fov: 50.0,
         lights: Vec::new(),
         default_lights: false,
-        max_depth: 5,
+        bounces: 5,
         samples: 2,
         exposure: 1.0,
         ambient: 0.06,

@@ -3,15 +3,18 @@
 
 use super::stdout_line;
 use crate::args::{RenderArgs, View, WorkArg};
+use crate::limits::check_memory;
 use crate::progress::Bar;
-use anyhow::{Context, Result, anyhow, bail};
+use crate::values::BadUsage;
+use anyhow::{Context, Result, anyhow};
 use std::io::Write;
 use std::path::PathBuf;
 use std::time::Instant;
 use vlf_bake::Progress;
 use vlf_bake::atomic::write_atomically;
+use vlf_bake::params::human_bytes;
 use vlf_render::setup::{CameraChoice, CameraError, CameraRequest, Framing, LightChoice, choose_camera, choose_lights};
-use vlf_render::{Background, Scene, SceneOptions, Settings, WorkMetric};
+use vlf_render::{Background, Frame, Scene, SceneBounds, SceneOptions, Settings, WorkMetric};
 use vlf_runtime::Field;
 
 /// What `render` prints, and its `--json` keys.
@@ -61,26 +64,10 @@ struct WorkImageSummary {
 
 /// `vlf-bake render`: ray traces a picture of a field (and of its work) and prints the summary.
 pub fn run(a: &RenderArgs) -> Result<()> {
-    if a.width == 0 || a.height == Some(0) {
-        bail!("--width and --height must be positive");
-    }
-    if a.samples == 0 || a.samples > 16 {
-        bail!("--samples must be between 1 and 16 (it is per axis: 16 = 256 rays per pixel)");
-    }
-    if a.max_depth > vlf_render::MAX_BOUNCES {
-        bail!("--max-depth must be at most {}", vlf_render::MAX_BOUNCES);
-    }
-    if !(a.fov > 0.0 && a.fov < 180.0) {
-        bail!("--fov must be between 0 and 180 degrees");
-    }
-    if !(a.exposure.is_finite() && a.exposure > 0.0) {
-        bail!("--exposure must be positive");
-    }
-    if !(a.ambient.is_finite() && a.ambient >= 0.0) {
-        bail!("--ambient must not be negative");
-    }
+    // Every flag's range was checked as it was parsed (`crate::values`).
     let field = Field::open(&a.field)?;
-    let (center, radius) = field.bounding_sphere();
+    let bounds = SceneBounds::of(&field);
+    let (center, radius) = (bounds.center, bounds.radius);
     let cameras: Vec<_> = field.cameras().collect();
     let request = CameraRequest {
         camera: a.camera,
@@ -96,7 +83,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         height: a.height,
     };
     let field_name = a.field.display();
-    let CameraChoice { view, height, description: camera_name } = choose_camera(&request, &cameras, center, radius)
+    let CameraChoice { view, width, height, description: camera_name } = choose_camera(&request, &cameras, &bounds)
         .map_err(|e| match e {
             CameraError::NoSuchCamera { index, count } => {
                 anyhow!("--camera {index}: {field_name} has {count} camera(s)")
@@ -104,17 +91,35 @@ pub fn run(a: &RenderArgs) -> Result<()> {
             CameraError::Degenerate { index } => {
                 anyhow!("camera {index} of {field_name} cannot be used: its frame is degenerate")
             }
-            CameraError::EyeIsTarget => anyhow!("--eye and --target are the same point"),
+            CameraError::EyeIsTarget => BadUsage("--eye and --target are the same point".into()).into(),
+            CameraError::UpAlongSight => BadUsage(format!(
+                "--up {} is along the line of sight from --eye to the target, so it gives the picture no up: \
+                 give a direction across it",
+                a.up.map(|c| c.to_string()).join(",")
+            ))
+            .into(),
         })?;
+    // Before anything of the picture's size is allocated.
+    let (frame_bytes, picture_bytes) =
+        (Frame::bytes(width, height), vlf_render::picture_bytes_at_most(width, height, a.work_image.is_some()));
+    check_memory(
+        frame_bytes.saturating_add(picture_bytes),
+        &format!(
+            "a {width}×{height} picture (frame {}, {} {})",
+            human_bytes(frame_bytes),
+            if a.work_image.is_some() { "picture and work picture" } else { "picture" },
+            human_bytes(picture_bytes)
+        ),
+    )?;
     let field_lights: Vec<_> = field.lights().collect();
     let LightChoice { lights, description: lights_name } =
         choose_lights(&a.lights, a.default_lights, &field_lights, &view, center, radius);
 
     let settings = Settings {
-        width: a.width,
+        width,
         height,
         samples: a.samples,
-        max_depth: a.max_depth,
+        max_depth: a.bounces,
         ambient: a.ambient,
         background: a.background.map_or(Background::Sky, Background::Solid),
     };
@@ -127,9 +132,11 @@ pub fn run(a: &RenderArgs) -> Result<()> {
     let seconds = start.elapsed().as_secs_f64();
     bar.end();
 
-    let png = vlf_render::encode_png(frame.width, frame.height, &vlf_render::to_srgb8(&frame, a.exposure))?;
-    write_atomically(&a.output, |w| w.write_all(&png))
-        .with_context(|| format!("cannot write {}", a.output.display()))?;
+    {
+        let png = vlf_render::encode_png(frame.width, frame.height, &vlf_render::to_srgb8(&frame, a.exposure))?;
+        write_atomically(&a.output, |w| w.write_all(&png))
+            .with_context(|| format!("cannot write {}", a.output.display()))?;
+    }
     let work_image = match &a.work_image {
         None => None,
         Some(path) => {

@@ -38,8 +38,8 @@ pub fn run(a: &TraceArgs) -> Result<()> {
         field.par_closest_hits(&rays, &mut hits);
     }
     let seconds = start.elapsed().as_secs_f64();
-    write_atomically(&a.out, |w| w.write_all(bytemuck::cast_slice(&hits)))
-        .with_context(|| format!("cannot write hits file {}", a.out.display()))?;
+    write_atomically(&a.output, |w| w.write_all(bytemuck::cast_slice(&hits)))
+        .with_context(|| format!("cannot write hits file {}", a.output.display()))?;
     let hit_count = hits.iter().filter(|h| h.prim != u32::MAX).count();
     let invalid = rays.iter().filter(|r| !r.is_valid()).count();
     let mrays = rays.len() as f64 / seconds.max(1e-12) / 1e6;
@@ -52,6 +52,8 @@ pub fn run(a: &TraceArgs) -> Result<()> {
             })
             .to_string(),
         )
+    } else if a.quiet {
+        Ok(())
     } else {
         stdout_line(&format!(
             "traced {} rays ({} hits, {invalid} invalid) in {seconds:.3} s: {mrays:.2} Mrays/s on {} threads",

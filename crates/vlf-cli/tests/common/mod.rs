@@ -161,3 +161,33 @@ pub fn spawn<S: AsRef<OsStr>>(args: &[S]) -> (String, Child) {
 pub fn wait((what, child): (String, Child)) -> Run {
     Run::from_output(what, child.wait_with_output().expect("wait for vlf-bake"))
 }
+
+/// The temporary files of atomic writes in `dir` (`.NAME.XXXXXX.tmp`), by name.
+pub fn temp_files_in(dir: &Path) -> Vec<String> {
+    names_in(dir).into_iter().filter(|n| n.starts_with('.') && n.ends_with(".tmp")).collect()
+}
+
+/// Runs `vlf-bake ARGS...` through `sh -c 'ulimit LIMIT && exec ...'`: with a resource limit
+/// (`-f BLOCKS`: file size; `-v KB`: address space) set in the process before it starts.
+pub fn vlf_with_ulimit<S: AsRef<OsStr>>(limit: &str, args: &[S]) -> Run {
+    let mut sh = Command::new("sh");
+    sh.arg("-c").arg(format!("ulimit {limit} && exec \"$0\" \"$@\"")).arg(BIN).args(args);
+    sh.env_remove("RAYON_NUM_THREADS").env_remove("VLF_CACHE_DIR");
+    let what = format!("ulimit {limit}; {}", describe(args));
+    let out = sh.stdin(Stdio::null()).output().unwrap_or_else(|e| panic!("cannot run `{what}`: {e}"));
+    Run::from_output(what, out)
+}
+
+/// The bytes free for an unprivileged writer on the file system of `dir`, and its size.
+#[cfg(unix)]
+pub fn disk_space(dir: &Path) -> (u64, u64) {
+    let s = rustix::fs::statvfs(dir).expect("statvfs");
+    (s.f_bavail * s.f_frsize, s.f_blocks * s.f_frsize)
+}
+
+/// `MemAvailable` of `/proc/meminfo`, in bytes.
+pub fn memory_available() -> Option<u64> {
+    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = info.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    line["MemAvailable:".len()..].trim().trim_end_matches("kB").trim().parse::<u64>().ok().map(|kb| kb * 1024)
+}

@@ -1,0 +1,289 @@
+//! Issue 11, items 7 and 8: the default camera frames the whole scene, one size flag keeps the
+//! aspect ratio, impossible cameras and picture names are refused; and every command follows one
+//! convention for exit codes, range messages, flag names, help and summaries.
+
+#![forbid(unsafe_code)]
+
+mod common;
+
+use common::{Run, mesh, names_in, s, temp_files_in, tempdir, vlf};
+use std::path::{Path, PathBuf};
+
+/// Writes a closed box from `lo` to `hi` (12 triangles) as OBJ and bakes it with small
+/// parameters; returns the field.
+fn box_field(dir: &Path, name: &str, lo: [f32; 3], hi: [f32; 3]) -> PathBuf {
+    let obj = dir.join(format!("{name}.obj"));
+    let mut file = std::fs::File::create(&obj).unwrap();
+    vlf_bake::generate::write_obj(&mut file, name, &vlf_bake::generate::closed_box(lo, hi)).unwrap();
+    let field = dir.join(format!("{name}.vlf"));
+    vlf(&["bake", s(&obj), "-o", s(&field), "--directions", "33", "--tiles", "16", "-q"]).ok();
+    field
+}
+
+/// Writes the rays of `rays ARGS` and traces them: one hit flag per pixel, row by row.
+fn hit_mask(dir: &Path, field: &Path, args: &[&str]) -> Vec<bool> {
+    let (rays, hits) = (dir.join("mask.rays"), dir.join("mask.hits"));
+    vlf(&[&["rays", s(field), "-q", "-o", s(&rays)], args].concat()).ok();
+    vlf(&["trace", s(field), "--rays", s(&rays), "-o", s(&hits), "-q"]).ok();
+    let bytes = std::fs::read(&hits).unwrap();
+    bytes.chunks_exact(16).map(|h| u32::from_le_bytes(h[4..8].try_into().unwrap()) != u32::MAX).collect()
+}
+
+/// Asserts a bad command line: exit 2 and clap's shape, the first line being `error: LINE`.
+fn bad_usage(r: Run, line: &str) {
+    let r = r.fails_with(2);
+    assert_eq!(r.stderr.lines().next(), Some(format!("error: {line}").as_str()), "`{}`:\n{}", r.what, r.stderr);
+    assert!(r.stderr.contains("For more information, try '--help'."), "`{}`:\n{}", r.what, r.stderr);
+    assert_eq!(r.stdout, "");
+}
+
+// ---------------------------------------------------------------------------------------------
+// Item 7: the default camera
+
+#[test]
+fn a_long_thin_scene_is_seen_by_the_default_camera() {
+    let dir = tempdir();
+    let rod = box_field(dir.path(), "rod", [-500.0, -0.5, -0.5], [500.0, 0.5, 0.5]);
+    // The issue: `rays --view outside` hit 11 of 262,144 rays. Now, seen end on: two thirds.
+    let mask = hit_mask(dir.path(), &rod, &["--view", "outside"]);
+    assert_eq!(mask.len(), 640 * 480);
+    let hits = mask.iter().filter(|&&h| h).count();
+    assert!(hits * 2 > mask.len(), "{hits} of {} outside rays hit the rod", mask.len());
+    // ...and the picture is not empty: on black, most pixels are lit.
+    let png = dir.path().join("rod.png");
+    let args = ["render", s(&rod), "-o", s(&png), "--width", "64", "--samples", "1", "--background", "0,0,0", "-q"];
+    vlf(&args).ok();
+    let (w, h, rgb) = vlf_render::decode_png(&std::fs::read(&png).unwrap()).unwrap();
+    assert_eq!((w, h), (64, 48));
+    let lit = rgb.chunks_exact(3).filter(|p| p.iter().any(|&c| c > 0)).count();
+    assert!(lit * 2 > (w * h) as usize, "{lit} of {} pixels show the rod", w * h);
+}
+
+#[test]
+fn a_wide_scene_is_framed_whole_in_tall_and_wide_pictures() {
+    let dir = tempdir();
+    let wide = box_field(dir.path(), "wide", [-10.0, -1.0, -1.0], [10.0, 1.0, 1.0]);
+    for (width, height) in [(100usize, 300usize), (300, 100), (120, 90)] {
+        let mask = hit_mask(dir.path(), &wide, &["--width", &width.to_string(), "--height", &height.to_string()]);
+        let at = |x: usize, y: usize| mask[y * width + x];
+        // Not cropped: no pixel on the picture's edge sees the scene.
+        let edge =
+            (0..width).any(|x| at(x, 0) || at(x, height - 1)) || (0..height).any(|y| at(0, y) || at(width - 1, y));
+        assert!(!edge, "{width}×{height}: the scene touches the picture's edge");
+        // Framed closely: it comes within a tenth of the picture's size of an edge (the camera looks
+        // at the box's centre, so perspective may leave more room on the opposite side).
+        let columns: Vec<usize> = (0..width).filter(|&x| (0..height).any(|y| at(x, y))).collect();
+        let rows: Vec<usize> = (0..height).filter(|&y| (0..width).any(|x| at(x, y))).collect();
+        let near = |v: &[usize], n: usize| {
+            v.first().is_some_and(|&a| a < n / 10) || v.last().is_some_and(|&b| b >= n - n / 10)
+        };
+        assert!(near(&columns, width) || near(&rows, height), "{width}×{height}: the scene is framed loosely");
+    }
+}
+
+#[test]
+fn one_size_flag_keeps_four_to_three_for_rays_and_render() {
+    let dir = tempdir();
+    let field = box_field(dir.path(), "cube", [-1.0; 3], [1.0; 3]);
+    let rays = dir.path().join("r.bin");
+    for (flags, width, height) in [
+        (&[][..], 640, 480),
+        (&["--width", "800"][..], 800, 600),
+        (&["--height", "300"][..], 400, 300),
+        (&["--width", "30", "--height", "70"][..], 30, 70),
+    ] {
+        let j = vlf(&[&["rays", s(&field), "-o", s(&rays), "--json"], flags].concat()).ok().json();
+        assert_eq!((j["width"].as_u64(), j["height"].as_u64()), (Some(width), Some(height)), "rays {flags:?}: {j}");
+        assert_eq!(std::fs::metadata(&rays).unwrap().len(), width * height * 32);
+        assert_eq!(j["bytes"].as_u64(), Some(width * height * 32));
+        // render, at a tenth of the size for speed.
+        let small: Vec<String> =
+            flags.iter().map(|f| f.parse::<u64>().map_or(f.to_string(), |n| (n / 10).to_string())).collect();
+        let small: Vec<&str> = small.iter().map(String::as_str).collect();
+        let png = dir.path().join("p.png");
+        let base = ["render", s(&field), "-o", s(&png), "--samples", "1", "--json"];
+        let j = vlf(&[&base[..], &small].concat()).ok().json();
+        let expected = if flags.is_empty() { (640, 480) } else { (width / 10, height / 10) };
+        assert_eq!((j["width"].as_u64().unwrap(), j["height"].as_u64().unwrap()), expected, "render {small:?}: {j}");
+    }
+}
+
+#[test]
+fn impossible_cameras_and_picture_names_are_refused() {
+    let dir = tempdir();
+    let field = box_field(dir.path(), "cube", [-1.0; 3], [1.0; 3]);
+    let png = dir.path().join("p.png");
+    let render = |flags: &[&str]| vlf(&[&["render", s(&field), "-o", s(&png)][..], flags].concat());
+    bad_usage(
+        render(&["--up", "0,0,0"]),
+        "invalid value '0,0,0' for '--up <X,Y,Z>': `0,0,0` is the zero vector, which points nowhere: give an up \
+         direction such as 0,1,0",
+    );
+    bad_usage(
+        render(&["--eye", "0,5,0", "--target", "0,0,0", "--up", "0,1,0"]),
+        "--up 0,1,0 is along the line of sight from --eye to the target, so it gives the picture no up: give a \
+         direction across it",
+    );
+    bad_usage(
+        render(&["--eye", "0,-5,0", "--up", "0,2,0"]),
+        "--up 0,2,0 is along the line of sight from --eye to the target, so it gives the picture no up: give a \
+         direction across it",
+    );
+    for (flag, name) in [("-o", "x.jpg"), ("--output", "picture"), ("--work-image", "work.jpeg")] {
+        let path = dir.path().join(name);
+        let output = if flag == "--work-image" { s(&png) } else { s(&path) };
+        let args = ["render", s(&field), flag, s(&path), "-o", output];
+        let args = if flag == "--work-image" { &args[..] } else { &args[..4] };
+        let r = vlf(args).fails_with(2);
+        assert!(r.stderr.contains("does not end in .png: render writes PNG pictures only"), "{}", r.stderr);
+    }
+    assert_eq!(names_in(dir.path()), ["cube.obj", "cube.vlf"], "something was written");
+}
+
+// ---------------------------------------------------------------------------------------------
+// Item 8: one convention
+
+#[test]
+fn out_of_range_values_are_bad_command_lines_with_one_message() {
+    let dir = tempdir();
+    let field = box_field(dir.path(), "cube", [-1.0; 3], [1.0; 3]);
+    let bunny = mesh("bunny.obj");
+    let out = dir.path().join("out.vlf");
+    let png = dir.path().join("out.png");
+    let bake = ["bake", s(&bunny), "-o", s(&out)];
+    let render = ["render", s(&field), "-o", s(&png)];
+    let rays = ["rays", s(&field), "-o", s(&png)];
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        // The issue's commands and their spellings.
+        ([&bake[..], &["--tiles", "0"]].concat(), "--tiles must be between 1 and 65536, got 0"),
+        ([&bake[..], &["--tiles", "-5"]].concat(), "--tiles must be between 1 and 65536, got -5"),
+        ([&bake[..], &["--tiles=-5"]].concat(), "--tiles must be between 1 and 65536, got -5"),
+        ([&bake[..], &["--tiles", "abc"]].concat(), "--tiles must be between 1 and 65536, got abc"),
+        ([&bake[..], &["--tiles", "65537"]].concat(), "--tiles must be between 1 and 65536, got 65537"),
+        ([&bake[..], &["--threads", "0"]].concat(), "--threads must be between 1 and 1024, got 0"),
+        ([&bake[..], &["--directions", "2"]].concat(), "--directions must be between 3 and 33554433, got 2"),
+        ([&bake[..], &["--max-depth", "25"]].concat(), "--max-depth must be between 0 and 24, got 25"),
+        ([&bake[..], &["--leaf-size", "0"]].concat(), "--leaf-size must be between 1 and 4294967295, got 0"),
+        ([&render[..], &["--samples", "0"]].concat(), "--samples must be between 1 and 16, got 0"),
+        ([&render[..], &["--width", "0"]].concat(), "--width must be between 1 and 65535, got 0"),
+        ([&render[..], &["--bounces", "65"]].concat(), "--bounces must be between 0 and 64, got 65"),
+        ([&render[..], &["--max-depth", "65"]].concat(), "--bounces must be between 0 and 64, got 65"),
+        ([&render[..], &["--fov", "180"]].concat(), "--fov must be between 0 (excluded) and 180 (excluded), got 180"),
+        ([&render[..], &["--exposure", "0"]].concat(), "--exposure must be between 0 (excluded) and 1000, got 0"),
+        ([&render[..], &["--ambient", "-1"]].concat(), "--ambient must be between 0 and 1000, got -1"),
+        ([&rays[..], &["--width", "0"]].concat(), "--width must be between 1 and 65535, got 0"),
+        (vec!["pack", s(&field), "-o", s(&out), "--level", "20"], "--level must be between 1 and 19, got 20"),
+        (
+            vec!["trace", s(&field), "--rays", s(&out), "-o", s(&out), "--threads", "x"],
+            "--threads must be between 1 and 1024, got x",
+        ),
+        (vec!["gen", "random", "--count", "-3", "-o", s(&out)], "--count must be between 1 and 4294967295, got -3"),
+    ];
+    for (args, line) in cases {
+        bad_usage(vlf(&args), line);
+    }
+    // Sizes name the flag too.
+    let r = vlf(&[&bake[..], &["--max-bytes", "banana"]].concat()).fails_with(2);
+    assert!(r.stderr.starts_with("error: --max-bytes must be a size between 1 B and 16 EiB"), "{}", r.stderr);
+    assert_eq!(names_in(dir.path()), ["cube.obj", "cube.vlf"], "something was written");
+}
+
+#[test]
+fn old_spellings_still_work_as_aliases() {
+    let dir = tempdir();
+    let field = box_field(dir.path(), "cube", [-1.0; 3], [1.0; 3]);
+    let rays = dir.path().join("r.bin");
+    vlf(&["rays", s(&field), "--width", "16", "--height", "12", "-q", "-o", s(&rays)]).ok();
+    // trace: -o and --output like every other command, --out as before.
+    let mut outputs = Vec::new();
+    for flag in ["-o", "--output", "--out"] {
+        let hits = dir.path().join(format!("hits{flag}.bin"));
+        vlf(&["trace", s(&field), "--rays", s(&rays), flag, s(&hits), "-q"]).ok();
+        outputs.push(std::fs::read(&hits).unwrap());
+    }
+    assert!(outputs[0].len() == 16 * 12 * 16 && outputs.iter().all(|o| *o == outputs[0]));
+    // render: --bounces, and --max-depth as before.
+    let mut pictures = Vec::new();
+    for flag in ["--bounces", "--max-depth"] {
+        let png = dir.path().join(format!("p{flag}.png"));
+        vlf(&["render", s(&field), "-o", s(&png), "--width", "16", "--samples", "1", flag, "0", "-q"]).ok();
+        pictures.push(std::fs::read(&png).unwrap());
+    }
+    assert_eq!(pictures[0], pictures[1]);
+    assert_eq!(temp_files_in(dir.path()), Vec::<String>::new());
+}
+
+#[test]
+fn rays_and_gen_print_one_summary_line_or_json_or_nothing() {
+    let dir = tempdir();
+    let field = box_field(dir.path(), "cube", [-1.0; 3], [1.0; 3]);
+    let rays = dir.path().join("r.bin");
+    let r = vlf(&["rays", s(&field), "--width", "8", "--height", "6", "-o", s(&rays)]).ok();
+    assert_eq!(r.stdout, format!("wrote 48 rays (8×6, outside view) to {}: 1.5 KiB (1536 bytes)\n", rays.display()));
+    assert_eq!(r.stderr, "");
+    let j = vlf(&["rays", s(&field), "--view", "inside", "--width", "8", "-o", s(&rays), "--json"]).ok().json();
+    assert_eq!(
+        j,
+        serde_json::json!({"output": s(&rays), "rays": 48, "width": 8, "height": 6, "view": "inside", "bytes": 1536})
+    );
+    assert_eq!(vlf(&["rays", s(&field), "-q", "-o", s(&rays)]).ok().stdout, "");
+
+    let obj = dir.path().join("g.obj");
+    let r = vlf(&["gen", "grid", "--count", "2", "-o", s(&obj)]).ok();
+    let bytes = std::fs::metadata(&obj).unwrap().len();
+    assert_eq!(
+        r.stdout,
+        format!(
+            "generated 32 grid triangles (seed 1) into {}: {} ({bytes} bytes)\n",
+            obj.display(),
+            vlf_bake::params::human_bytes(bytes)
+        )
+    );
+    let j = vlf(&["gen", "random", "--count", "7", "--seed", "3", "-o", s(&obj), "--json"]).ok().json();
+    let bytes = std::fs::metadata(&obj).unwrap().len();
+    assert_eq!(j, serde_json::json!({"output": s(&obj), "scene": "random", "triangles": 7, "seed": 3, "bytes": bytes}));
+    assert_eq!(vlf(&["gen", "slivers", "--count", "5", "-q", "-o", s(&obj)]).ok().stdout, "");
+}
+
+/// `-h` prints one line per flag: its spelling, then its help. A flag without help text is its
+/// spelling alone.
+#[test]
+fn every_flag_of_every_command_has_help() {
+    let commands: [&[&str]; 13] = [
+        &[],
+        &["bake"],
+        &["merge"],
+        &["cache"],
+        &["cache", "prune"],
+        &["dump"],
+        &["pack"],
+        &["unpack"],
+        &["trace"],
+        &["rays"],
+        &["render"],
+        &["gen"],
+        &["demo"],
+    ];
+    for command in commands {
+        let r = vlf(&[command, &["-h"]].concat()).ok();
+        let mut in_options = false;
+        for line in r.stdout.lines() {
+            if line.ends_with(':') && !line.starts_with(' ') {
+                in_options = line == "Options:" || line == "Arguments:" || line == "Commands:";
+                continue;
+            }
+            if !in_options || line.trim().is_empty() {
+                continue;
+            }
+            // "  -o, --output <FILE>  The rays file ..." : the help follows two spaces; clap's own
+            // notes (`[default: 512]`, `[possible values: ...]`) are not help.
+            let text = line.trim_start();
+            let mut help = text.split_once("  ").map(|(_, h)| h.to_owned()).unwrap_or_default();
+            while let Some((start, end)) = help.find('[').zip(help.find(']')).filter(|(a, b)| a < b) {
+                help.replace_range(start..=end, "");
+            }
+            let no_help = help.trim().is_empty();
+            assert!(!no_help, "`vlf-bake {} -h`: no help for `{text}`\n{}", command.join(" "), r.stdout);
+        }
+    }
+}

@@ -1,0 +1,297 @@
+//! Issue 11, items 5 and 6: sizes and thread counts beyond what the machine has are refused up
+//! front, with one message naming the numbers, and nothing is left behind.
+//!
+//! No test here allocates, writes or waits for what it guards against: each command is refused
+//! before its work (the checks are the point), so the huge outputs never exist.
+
+#![forbid(unsafe_code)]
+
+mod common;
+
+use common::{Run, command, mesh, names_in, run, s, tempdir, vlf, vlf_with_ulimit};
+use std::path::{Path, PathBuf};
+
+/// Bakes the bunny with small parameters into `dir/bunny.vlf`.
+fn bunny(dir: &Path) -> PathBuf {
+    let field = dir.join("bunny.vlf");
+    vlf(&["bake", s(&mesh("bunny.obj")), "-o", s(&field), "--directions", "33", "--tiles", "16", "-q"]).ok();
+    field
+}
+
+/// Asserts a bad command line: exit 2 and clap's shape, the first line being `error: LINE`.
+fn bad_usage(r: Run, line: &str) {
+    let r = r.fails_with(2);
+    assert_eq!(r.stderr.lines().next(), Some(format!("error: {line}").as_str()), "`{}`:\n{}", r.what, r.stderr);
+    assert!(r.stderr.contains("For more information, try '--help'."), "`{}`:\n{}", r.what, r.stderr);
+    assert_eq!(r.stdout, "");
+}
+
+/// `human_bytes` of the library, as the messages print sizes.
+fn gib(bytes: u64) -> String {
+    vlf_bake::params::human_bytes(bytes)
+}
+
+#[test]
+fn rays_and_gen_beyond_the_disk_are_refused_before_writing() {
+    let dir = tempdir();
+    let field = bunny(dir.path());
+    let out = dir.path().join("rays.bin");
+    let o = s(&out);
+    // The issue's command: 10¹⁰ rays (320 GB) do not fit the u32 ray count of a rays file.
+    bad_usage(
+        vlf(&["rays", s(&field), "--width", "100000", "--height", "100000", "-o", o]),
+        "--width must be between 1 and 65535, got 100000",
+    );
+    bad_usage(
+        vlf(&["rays", s(&field), "--height", "70000", "-o", o]),
+        "--height must be between 1 and 65535, got 70000",
+    );
+    // The largest rays file there is: 128 GiB, refused where the disk has less room.
+    let (free, size) = common::disk_space(dir.path());
+    let needed = 65_535u64 * 65_535 * 32;
+    let r = vlf(&["rays", s(&field), "--width", "65535", "--height", "65535", "-o", o]);
+    if needed > free {
+        let expected = format!(
+            "error: the rays file of 65535×65535 rays needs {} but the file system of {} has ",
+            gib(needed),
+            dir.path().display()
+        );
+        assert!(r.one_error_line().starts_with(&expected), "{}", r.stderr);
+    } else {
+        println!("{} free: the 128 GiB rays file fits, so only the file size limit is tested", gib(free));
+    }
+    // A file size limit (ulimit -f, 512-byte blocks) is a limit too: 640×480 rays are 9.4 MiB.
+    let r = vlf_with_ulimit("-f 1000", &["rays", s(&field), "-o", o]);
+    assert_eq!(
+        r.one_error_line(),
+        "error: the rays file of 640×480 rays needs 9.4 MiB but this process may not write files over 500.0 KiB (ulimit -f)"
+    );
+
+    // gen: the issue's command overflows a field's triangle count; a grid of 100,000 cells per side
+    // would be 8·10¹⁰ triangles.
+    let obj = dir.path().join("scene.obj");
+    bad_usage(
+        vlf(&["gen", "random", "--count", "100000000000", "-o", s(&obj)]),
+        "--count must be between 1 and 4294967295, got 100000000000",
+    );
+    bad_usage(
+        vlf(&["gen", "grid", "--count", "100000", "-o", s(&obj)]),
+        "--count must be between 1 and 23170 for a grid (cells per side: 4 layers of 2 × count² triangles, at most \
+         4294967295), got 100000",
+    );
+    bad_usage(
+        vlf(&["gen", "slivers", "--count", "0", "-o", s(&obj)]),
+        "--count must be between 1 and 4294967295, got 0",
+    );
+    // The largest scenes there are take more than the whole file system: refused, not streamed.
+    for (kind, count, triangles) in [("random", "4294967295", 4_294_967_295u64), ("grid", "23170", 4_294_791_200)] {
+        let r = vlf(&["gen", kind, "--count", count, "-o", s(&obj)]);
+        let line = r.one_error_line();
+        let expected = format!("error: an OBJ of {triangles} {kind} triangles needs up to ");
+        assert!(line.starts_with(&expected), "{line}");
+        let needed =
+            vlf_bake::generate::obj_bytes_at_most(kind, triangles, if kind == "grid" { 23170.0 } else { 1.05 });
+        assert!(needed > size, "{kind}: {} fits a file system of {}", gib(needed), gib(size));
+        assert!(
+            line.contains(&format!("{} but the file system of {} has ", gib(needed), dir.path().display())),
+            "{line}"
+        );
+    }
+    assert_eq!(names_in(dir.path()), ["bunny.vlf"], "something was written");
+}
+
+#[test]
+fn a_picture_beyond_the_memory_is_refused_before_rendering() {
+    let dir = tempdir();
+    let field = bunny(dir.path());
+    let png = dir.path().join("big.png");
+    // The issue's command, in an address space of 4 GiB: 20000×20000 pixels need about 20 GiB.
+    let args = ["render", s(&field), "-o", s(&png), "--width", "20000", "--height", "20000"];
+    let r = vlf_with_ulimit("-v 4194304", &args);
+    let frame = vlf_render::Frame::bytes(20_000, 20_000);
+    let picture = vlf_render::picture_bytes_at_most(20_000, 20_000, false);
+    let expected = format!(
+        "error: a 20000×20000 picture (frame {}, picture {}) needs {} of memory, but ",
+        gib(frame),
+        gib(picture),
+        gib(frame + picture)
+    );
+    let line = r.one_error_line();
+    assert!(line.starts_with(&expected), "{line}");
+    assert!(line.ends_with(" may be used (what the address-space limit of 4.0 GiB (ulimit -v) leaves)"), "{line}");
+    // Without a limit, the largest picture (65535² pixels, over 200 GiB with its work picture) is
+    // more than this machine has.
+    let work = dir.path().join("work.png");
+    let args = ["render", s(&field), "-o", s(&png), "--width", "65535", "--height", "65535", "--work-image", s(&work)];
+    let needed = vlf_render::Frame::bytes(65_535, 65_535) + vlf_render::picture_bytes_at_most(65_535, 65_535, true);
+    let available = common::memory_available().expect("/proc/meminfo");
+    let r = vlf(&args);
+    assert!(needed > available, "{} needed, {} available", gib(needed), gib(available));
+    let line = r.one_error_line();
+    assert!(line.starts_with("error: a 65535×65535 picture (frame "), "{line}");
+    assert!(
+        line.contains(&format!(
+            ", picture and work picture {}) needs {} of memory, but ",
+            gib(needed - vlf_render::Frame::bytes(65_535, 65_535)),
+            gib(needed)
+        )),
+        "{line}"
+    );
+    assert!(line.contains(" may be used (three quarters of the "), "{line}");
+    assert_eq!(names_in(dir.path()), ["bunny.vlf"], "something was written");
+}
+
+#[test]
+fn thread_counts_are_refused_above_1024_and_reduced_to_the_cores() {
+    let dir = tempdir();
+    let out = dir.path().join("out.vlf");
+    let bunny = mesh("bunny.obj");
+    let bake = |threads: &str| {
+        run(command().arg("bake").arg(&bunny).arg("-o").arg(&out).args(["--directions", "33", "--tiles", "16"]).args([
+            "--threads",
+            threads,
+            "-q",
+        ]))
+    };
+    // The issue's commands: 100,000 threads hung the bake, 5,000 made it forty times slower.
+    for t in ["100000", "5000", "1025", "0", "-1"] {
+        bad_usage(bake(t), &format!("--threads must be between 1 and 1024, got {t}"));
+        assert!(!out.exists());
+    }
+    // Up to 1024 is accepted and reduced to the cores, with one warning line; the field is the same.
+    let cores = std::thread::available_parallelism().unwrap().get();
+    let reference = dir.path().join("one.vlf");
+    vlf(&["bake", s(&bunny), "-o", s(&reference), "--directions", "33", "--tiles", "16", "--threads", "1", "-q"]).ok();
+    if cores < 1024 {
+        let r = bake("1024").ok();
+        assert_eq!(
+            r.stderr,
+            format!(
+                "warning: --threads 1024 is more than the {cores} cores available; using {cores} (more threads than \
+                 cores cannot speed up this work)\n"
+            )
+        );
+        assert_eq!(std::fs::read(&out).unwrap(), std::fs::read(&reference).unwrap());
+        // RAYON_NUM_THREADS gets the same treatment.
+        let rays = dir.path().join("rays.bin");
+        vlf(&["rays", s(&reference), "--width", "8", "--height", "8", "-q", "-o", s(&rays)]).ok();
+        let hits = dir.path().join("hits.bin");
+        let args = ["trace", s(&reference), "--rays", s(&rays), "-o", s(&hits), "--json"];
+        let r = run(command().env("RAYON_NUM_THREADS", "100000").args(args)).ok();
+        assert!(r.stderr.starts_with("warning: RAYON_NUM_THREADS=100000 is more than the "), "{}", r.stderr);
+        assert_eq!(r.json()["threads"], cores);
+    }
+}
+
+/// Starting the workers can fail (here: a cap on the processes of a user, `prlimit --nproc`); so
+/// can a thread the bake starts later. Either is one error line and exit 1, never a hang or an
+/// abort, and the temporary file is removed. Run as a user id of its own, since root ignores the
+/// cap and the cap counts every process of the user.
+#[cfg(unix)]
+#[test]
+fn failing_to_start_a_thread_is_an_error_not_a_hang() {
+    use std::os::unix::fs::PermissionsExt;
+    use std::os::unix::process::CommandExt;
+    if rustix::process::getuid().as_raw() != 0 {
+        println!("not root: cannot run as a user of its own; skipped");
+        return;
+    }
+    let dir = tempdir();
+    std::fs::set_permissions(dir.path(), std::fs::Permissions::from_mode(0o777)).unwrap();
+    let out = dir.path().join("scene.vlf");
+    vlf(&["bake", s(&mesh("Box.gltf")), "-o", s(&out), "--directions", "3", "--tiles", "2", "-q"]).ok();
+    let previous = std::fs::read(&out).unwrap();
+    // 1: no thread at all; 2: the signal thread but no worker; 3: one worker of two; 4: both
+    // workers, but not the bake's writer thread.
+    for (processes, says) in [
+        ("1", "error: cannot install the handler of SIGINT and SIGTERM: "),
+        ("2", "error: cannot start 2 worker threads: "),
+        ("3", "error: cannot start 2 worker threads: "),
+        ("4", "error: internal error in thread vlf-worker-"),
+    ] {
+        let mut cmd = std::process::Command::new("prlimit");
+        cmd.arg(format!("--nproc={processes}")).arg("--").arg(common::BIN);
+        cmd.args([
+            "bake",
+            s(&mesh("bunny.obj")),
+            "-o",
+            s(&out),
+            "--directions",
+            "33",
+            "--tiles",
+            "16",
+            "--threads",
+            "2",
+        ]);
+        cmd.uid(54_321).gid(54_321).env_remove("RAYON_NUM_THREADS");
+        let r = run(&mut cmd);
+        let line = r.one_error_line();
+        assert!(line.starts_with(says), "--nproc={processes}: {line}");
+        assert_eq!(std::fs::read(&out).unwrap(), previous, "--nproc={processes}: the field changed");
+        assert_eq!(names_in(dir.path()), ["scene.vlf"], "--nproc={processes}: left files behind");
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// The limits table of docs/reliability.md
+
+/// The text inside a Markdown code span (`` `x` `` or ``` `` x `` ```).
+fn code_span(cell: &str) -> &str {
+    let cell = cell.trim();
+    cell.strip_prefix("`` ")
+        .and_then(|c| c.strip_suffix(" ``"))
+        .or_else(|| cell.strip_prefix('`').and_then(|c| c.strip_suffix('`')))
+        .unwrap_or_else(|| panic!("not a code span: {cell:?}"))
+}
+
+/// Bytes from a size as the messages print it (`741.7 GiB`), rounded down to the tenth.
+fn size_of_text(text: &str) -> u64 {
+    let (number, unit) = text.split_once(' ').unwrap();
+    let scale = match unit {
+        "GiB" => 1u64 << 30,
+        "TiB" => 1 << 40,
+        other => panic!("unit {other}"),
+    };
+    (number.parse::<f64>().unwrap() * scale as f64) as u64
+}
+
+#[test]
+fn the_limits_table_is_what_the_commands_do() {
+    let doc = std::fs::read_to_string(Path::new(common::DOCS).join("reliability.md")).unwrap();
+    let (start, end) = (doc.find("<!-- limits:begin -->").unwrap(), doc.find("<!-- limits:end -->").unwrap());
+    let rows: Vec<&str> = doc[start..end].lines().filter(|l| l.starts_with('|')).skip(2).collect();
+    assert!(rows.len() >= 20, "only {} rows", rows.len());
+    let dir = tempdir();
+    let field = bunny(dir.path());
+    std::fs::rename(&field, dir.path().join("field.vlf")).unwrap();
+    let (free, _) = common::disk_space(dir.path());
+    let memory = common::memory_available().unwrap() / 4 * 3;
+    for row in rows {
+        let cells: Vec<&str> = row.trim().trim_matches('|').split(" | ").collect();
+        assert_eq!(cells.len(), 4, "case | command | exit | standard error: {row}");
+        let command_line = code_span(cells[1]);
+        let exit: i32 = cells[2].trim().parse().unwrap();
+        let expected = code_span(cells[3]);
+        // A message that goes on with this machine's numbers: run only where the machine has less
+        // than the row needs (else the command would do the work for real).
+        if let Some(prefix) = expected.strip_suffix('…') {
+            let needs = prefix.split(" needs ").nth(1).unwrap().trim_start_matches("up to ");
+            let needed = size_of_text(&needs.split(' ').take(2).collect::<Vec<_>>().join(" "));
+            let has = if prefix.contains(" of memory") { memory } else { free };
+            if needed <= has {
+                println!("skipped, this machine has room: {command_line}");
+                continue;
+            }
+        }
+        let mesh = mesh("bunny.obj");
+        let args: Vec<&str> = command_line.split(' ').map(|a| if a == "MESH" { s(&mesh) } else { a }).collect();
+        let r = run(command().current_dir(dir.path()).args(&args));
+        assert_eq!(r.code, exit, "`{command_line}`: exit code\n{}", r.stderr);
+        let first = r.stderr.lines().next().unwrap_or("");
+        match expected.strip_suffix('…') {
+            Some(prefix) => assert!(first.starts_with(prefix), "`{command_line}`:\n{first}\nnot\n{prefix}"),
+            None => assert_eq!(first, expected, "`{command_line}`"),
+        }
+        assert_eq!(names_in(dir.path()), ["field.vlf"], "`{command_line}` left files behind");
+    }
+}
