@@ -10,7 +10,8 @@
 //! those samples through [`Measure`], which the prepared scene implements
 //! (`crate::estimate`), so that the policy here depends on nothing else in the crate.
 
-use vlf_format::{MAX_DEPTH, Request, StatisticsRecord, size};
+pub use vlf_format::MAX_DEPTH;
+use vlf_format::{Request, StatisticsRecord, size};
 use vlf_geom::Lattice;
 
 /// The conservative margin as a fraction of the bounding radius (`formats/vlf.md` §6.2).

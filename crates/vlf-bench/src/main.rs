@@ -144,7 +144,7 @@ struct PeersArgs {
     t_tolerance: f64,
     /// How the kd-tree's depth and leaf size are chosen.
     #[arg(long, value_enum, default_value = "tuned")]
-    kd: vlf_bench::peers::contestant::KdChoice,
+    kd: vlf_bench::peers::KdChoice,
     /// Also bake each scene at the --sweep-params settings and time the field (speed against size).
     #[arg(long)]
     sweep: bool,

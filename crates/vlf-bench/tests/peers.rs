@@ -3,7 +3,7 @@
 //! peers with their own triangle tests agree up to rounding, and the report is written and can be
 //! rewritten from its JSON.
 
-use vlf_bench::peers::contestant::KdChoice;
+use vlf_bench::peers::KdChoice;
 use vlf_bench::peers::report::Report;
 use vlf_bench::peers::scenes::{SceneSpec, SizeRule};
 use vlf_bench::peers::{PeersConfig, run};

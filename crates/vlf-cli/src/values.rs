@@ -20,7 +20,7 @@ pub const MAX_DIRECTIONS: u32 = 33_554_433;
 /// The largest `--tiles`.
 pub const MAX_TILES: u32 = 65_536;
 /// The largest `--max-depth` of a bake: the format's limit (`formats/vlf.md` §5.2).
-pub const MAX_BSP_DEPTH: u32 = 24;
+pub const MAX_BSP_DEPTH: u32 = vlf_bake::params::MAX_DEPTH;
 /// The most worker threads a command accepts; more than the cores available are clamped to them.
 pub const MAX_THREADS: usize = 1024;
 /// The largest image side of `render` and `rays`: width × height then always fits the u32 ray

@@ -727,7 +727,7 @@ fn invalid_flags_are_refused_with_a_clear_message() {
     for (flags, phrase) in [
         (&["--tiles", "0", "--directions", "33"][..], "--tiles must be between 1 and 65536, got 0"),
         (&["--directions", "0", "--tiles", "16"], "--directions must be between 3 and 33554433, got 0"),
-        (&["--max-depth", "99", "--directions", "33", "--tiles", "16"], "--max-depth must be between 0 and 24, got 99"),
+        (&["--max-depth", "99", "--directions", "33", "--tiles", "16"], "--max-depth must be between 0 and 12, got 99"),
         (&["--threads", "0", "--directions", "33", "--tiles", "16"], "--threads must be between 1 and 1024, got 0"),
     ] {
         let r = bake_with(flags).fails_with(2);

@@ -162,7 +162,7 @@ fn out_of_range_values_are_bad_command_lines_with_one_message() {
         ([&bake[..], &["--tiles", "65537"]].concat(), "--tiles must be between 1 and 65536, got 65537"),
         ([&bake[..], &["--threads", "0"]].concat(), "--threads must be between 1 and 1024, got 0"),
         ([&bake[..], &["--directions", "2"]].concat(), "--directions must be between 3 and 33554433, got 2"),
-        ([&bake[..], &["--max-depth", "25"]].concat(), "--max-depth must be between 0 and 24, got 25"),
+        ([&bake[..], &["--max-depth", "13"]].concat(), "--max-depth must be between 0 and 12, got 13"),
         ([&bake[..], &["--leaf-size", "0"]].concat(), "--leaf-size must be between 1 and 4294967295, got 0"),
         ([&render[..], &["--samples", "0"]].concat(), "--samples must be between 1 and 16, got 0"),
         ([&render[..], &["--width", "0"]].concat(), "--width must be between 1 and 65535, got 0"),

@@ -2,8 +2,8 @@
 //! the field's watertight kernel) on a sample of each ray set.
 
 use super::contestant::{Contestant, PeerHit};
+use super::model::{Counts, Query, Tri};
 use super::rays::RaySet;
-use super::{Query, Tri};
 use rayon::prelude::*;
 use vlf_geom::{BruteForce, Intersector, Ray};
 
@@ -83,41 +83,5 @@ impl Checked {
             }
         }
         k
-    }
-}
-
-/// One contestant's agreement with the brute force on one set's sample.
-#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
-pub struct Counts {
-    pub contestant: String,
-    /// Rays compared.
-    pub rays: usize,
-    /// The same answer: both miss, or the same `t` bit for bit and the same triangle (any-hit:
-    /// the same yes or no).
-    pub same: usize,
-    /// The same `t` bit for bit on another triangle: a float tie (triangles meeting at the hit
-    /// point), which only the order of the tests decides.
-    pub ties: usize,
-    /// Both hit, `t` differs but by at most the relative tolerance.
-    pub t_close: usize,
-    /// Of `t_close`, those on another triangle.
-    pub other_prim_close: usize,
-    /// Both hit, `t` differs by more than the tolerance.
-    pub t_far: usize,
-    /// The contestant hits, the brute force misses.
-    pub extra_hits: usize,
-    /// The brute force hits, the contestant misses.
-    pub missed: usize,
-}
-
-impl Counts {
-    /// Answers that are not bit-identical to the brute force's, float ties aside.
-    pub fn inexact(&self) -> usize {
-        self.t_close + self.t_far + self.extra_hits + self.missed
-    }
-
-    /// Disagreements beyond rounding: a hit against a miss, or a `t` beyond the tolerance.
-    pub fn wrong(&self) -> usize {
-        self.t_far + self.extra_hits + self.missed
     }
 }

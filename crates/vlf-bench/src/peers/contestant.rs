@@ -2,7 +2,7 @@
 //! the visibility field (baked at its default automatic parameters, then mapped) and the paper's
 //! CRT kd-tree.
 
-use super::Tri;
+use super::model::{KdChoice, Tri};
 use crate::experiments::tune_kd;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -137,16 +137,6 @@ impl Contestant for FieldContestant {
             *o = view.any_hit(r);
         }
     }
-}
-
-/// How the kd-tree's depth and leaf size are chosen.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize, serde::Deserialize)]
-pub enum KdChoice {
-    /// The paper's tuning (`tune_kd`, as Figure 3): a sweep of depths and leaf sizes, scored on
-    /// 128×128 frames from both views; only the final build is timed.
-    Tuned,
-    /// `KdParams::default()`: depth 20, leaf size 2.
-    Default,
 }
 
 /// The CRT kd-tree of `vlf-kdtree`.

@@ -4,8 +4,8 @@
 //! Memory comes from `rtcSetDeviceMemoryMonitorFunction`: everything the device holds after the
 //! build (vertex and index buffers and the BVH).
 
-use super::Tri;
 use super::contestant::{Contestant, PeerHit};
+use super::model::Tri;
 use std::ffi::{c_char, c_int, c_uint};
 use std::time::Instant;
 use vlf_geom::Ray;

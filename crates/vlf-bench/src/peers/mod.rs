@@ -15,6 +15,7 @@ pub mod contestant;
 #[cfg(feature = "embree")]
 #[allow(unsafe_code)] // The FFI to Embree's C shim: every unsafe block says why it is sound.
 pub mod embree;
+pub mod model;
 #[cfg(feature = "obvhs")]
 pub mod obvhs;
 pub mod rays;
@@ -23,151 +24,20 @@ pub mod scenes;
 
 use crate::median;
 use anyhow::Context as _;
-use contestant::{Contestant, FieldContestant, KdChoice, KdContestant, PeerHit};
+use contestant::{Contestant, FieldContestant, KdContestant, PeerHit};
+pub use model::*;
 use rayon::prelude::*;
 use rays::RaySet;
 use scenes::{LoadedScene, SceneSpec};
 use std::hint::black_box;
-use std::path::PathBuf;
 use std::time::Instant;
 use vlf_bake::BakeConfig;
 use vlf_geom::{Camera, Ray};
-
-/// A triangle as every contestant takes it.
-pub type Tri = [[f32; 3]; 3];
-
-/// What a ray set asks.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-pub enum Query {
-    /// Closest hit (`rtcIntersect1`).
-    Closest,
-    /// Any hit (`rtcOccluded1`).
-    Any,
-}
-
-/// Everything a run needs.
-#[derive(Clone, Debug)]
-pub struct PeersConfig {
-    pub scenes: Vec<SceneSpec>,
-    /// Where fields are baked (deleted after use unless `keep_fields`).
-    pub work: PathBuf,
-    /// Where `peers.md`, `peers.json` and the plots go.
-    pub out: PathBuf,
-    /// Primary images are `resolution²` rays.
-    pub resolution: u32,
-    /// Incoherent rays per scene.
-    pub incoherent: usize,
-    /// Timed runs per measurement, after a warm-up run.
-    pub repeats: usize,
-    /// Thread counts to time at (a rayon pool of each size).
-    pub threads: Vec<usize>,
-    /// Rays sampled per set for the brute-force check of scenes with more than `check_all_below`
-    /// triangles; smaller scenes are checked on every ray.
-    pub check_rays: usize,
-    pub check_all_below: usize,
-    /// Relative `t` difference counted as rounding for contestants with another triangle test.
-    pub t_tolerance: f64,
-    pub kd: KdChoice,
-    /// Explicit (directions, tiles) settings for the size sweep; empty: no sweep.
-    pub sweep: Vec<(u32, u32)>,
-    pub keep_fields: bool,
-    /// The command line, as the report shows it.
-    pub command: String,
-    /// Print progress lines.
-    pub verbose: bool,
-    /// A quick run: said in the report's title.
-    pub quick: bool,
-}
 
 /// Rays per parallel work item.
 const CHUNK: usize = 1024;
 /// The seed of the incoherent rays and of the checked samples.
 const SEED: u64 = 12;
-
-/// One timed measurement.
-#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
-pub struct Speed {
-    pub contestant: String,
-    pub threads: usize,
-    pub median_s: f64,
-    pub runs_s: Vec<f64>,
-    pub mrays_per_s: f64,
-    /// The 1-minute load average when the measurement started.
-    pub load: f64,
-}
-
-/// One ray set of one scene.
-#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
-pub struct SetResult {
-    pub name: String,
-    pub query: Query,
-    pub rays: usize,
-    /// The rays hit (closest) or blocked (any), by the field.
-    pub hits: usize,
-    pub speeds: Vec<Speed>,
-    pub checks: Vec<check::Counts>,
-}
-
-impl SetResult {
-    /// Mrays/s of `contestant` at `threads`.
-    pub fn mrays(&self, contestant: &str, threads: usize) -> Option<f64> {
-        self.speeds.iter().find(|s| s.contestant == contestant && s.threads == threads).map(|s| s.mrays_per_s)
-    }
-}
-
-/// A contestant's build.
-#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
-pub struct Built {
-    pub contestant: String,
-    pub params: String,
-    pub build_s: f64,
-    pub bytes: u64,
-    pub bytes_per_triangle: f64,
-}
-
-/// The field's own figures.
-#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
-pub struct FieldInfo {
-    pub directions: u32,
-    pub tiles: u32,
-    pub bake_s: f64,
-    pub open_ms: f64,
-    pub bytes: u64,
-    pub bytes_per_triangle: f64,
-    pub choice: String,
-}
-
-/// The field at one explicit setting of the sweep.
-#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
-pub struct SweepPoint {
-    pub field: FieldInfo,
-    /// (set, threads, Mrays/s).
-    pub speeds: Vec<(String, usize, f64)>,
-}
-
-/// Everything measured on one scene.
-#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
-pub struct SceneResult {
-    pub name: String,
-    pub description: String,
-    pub triangles: usize,
-    pub field: FieldInfo,
-    pub built: Vec<Built>,
-    pub sets: Vec<SetResult>,
-    pub sweep: Vec<SweepPoint>,
-    /// Settings the sweep could not bake, and why.
-    pub sweep_skipped: Vec<String>,
-    pub light: [f64; 3],
-    pub seconds: f64,
-}
-
-/// The load average over the last minute.
-pub fn load_average() -> f64 {
-    std::fs::read_to_string("/proc/loadavg")
-        .ok()
-        .and_then(|s| s.split_whitespace().next().and_then(|v| v.parse().ok()))
-        .unwrap_or(f64::NAN)
-}
 
 fn note(verbose: bool, msg: impl std::fmt::Display) {
     if verbose {
@@ -317,7 +187,7 @@ pub fn run_scene(spec: &SceneSpec, cfg: &PeersConfig) -> anyhow::Result<SceneRes
         );
         let checked =
             check::Checked::new(&stored, baked.center, set, &rays::sample(set.rays.len(), sample, SEED + k as u64));
-        let checks: Vec<check::Counts> = all.iter().map(|c| checked.compare(*c, cfg.t_tolerance)).collect();
+        let checks: Vec<Counts> = all.iter().map(|c| checked.compare(*c, cfg.t_tolerance)).collect();
         let mut speeds = Vec::new();
         for (threads, pool) in &pools {
             for c in &all {

@@ -3,8 +3,8 @@
 //! as Embree"), its triangles reordered into leaf order as `RtTriangle`s, and its own triangle
 //! test (`RtTriangle::intersect`, Möller–Trumbore in f32). Built with obvhs's `parallel` feature.
 
-use super::Tri;
 use super::contestant::{Contestant, PeerHit};
+use super::model::Tri;
 use glam::Vec3A;
 use obvhs::BvhBuildParams;
 use obvhs::cwbvh::CwBvh;

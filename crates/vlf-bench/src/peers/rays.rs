@@ -10,8 +10,8 @@
 //!   radius): origin the hit point, direction the light minus the origin (so the light is at
 //!   `t = 1`), `t` on `[10⁻⁴, 1 − 10⁻⁴]`: the ray leaves the surface and stops just short of the light.
 
+use super::model::{Query, Tri};
 use super::scenes::bounds;
-use super::{Query, Tri};
 use vlf_bake::generate::Rng;
 use vlf_geom::{Camera, Ray};
 

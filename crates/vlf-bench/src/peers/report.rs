@@ -1,8 +1,8 @@
 //! `peers.md`, `peers.json` and the plots, written whole from a run's results: nothing in them
 //! is typed by hand, so rerunning the command regenerates the page.
 
+use super::model::{KdChoice, PeersConfig, SceneResult, SetResult, load_average};
 use super::rays::{LIGHT_OFFSET, SHADOW_T};
-use super::{PeersConfig, SceneResult, SetResult};
 use crate::plot::{Series, bar_chart, line_chart_with_references};
 use crate::write_output;
 use std::fmt::Write as _;
@@ -21,7 +21,7 @@ pub struct Report {
     pub repeats: usize,
     pub threads: Vec<usize>,
     pub t_tolerance: f64,
-    pub kd: super::KdChoice,
+    pub kd: KdChoice,
     pub quick: bool,
     pub load_before: f64,
     pub load_after: f64,
@@ -78,7 +78,7 @@ impl Report {
             t_tolerance: cfg.t_tolerance,
             kd: cfg.kd,
             quick: cfg.quick,
-            load_before: super::load_average(),
+            load_before: load_average(),
             load_after: f64::NAN,
             total_seconds: 0.0,
             scenes: Vec::new(),
@@ -201,8 +201,8 @@ impl Report {
              CWBVH at `medium_build` with its own triangle test; the kd-tree {}.",
             self.contestants.join(", "),
             match self.kd {
-                super::KdChoice::Tuned => "tuned per scene as in Figure 3 (`tune_kd`)",
-                super::KdChoice::Default => "at `KdParams::default()` (depth 20, leaf 2)",
+                KdChoice::Tuned => "tuned per scene as in Figure 3 (`tune_kd`)",
+                KdChoice::Default => "at `KdParams::default()` (depth 20, leaf 2)",
             }
         );
         let _ = writeln!(
@@ -363,7 +363,7 @@ impl Report {
         );
         let head = "| contestant | checked | same | ties | t close (other triangle) | t far | extra | missed |";
         let rule = "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |";
-        let row = |c: &super::check::Counts| {
+        let row = |c: &super::model::Counts| {
             format!(
                 "{} | {} | {} | {} ({}) | {} | {} | {} |",
                 c.rays, c.same, c.ties, c.t_close, c.other_prim_close, c.t_far, c.extra_hits, c.missed
@@ -371,7 +371,7 @@ impl Report {
         };
         let _ = writeln!(m, "Totals over every scene and set:\n\n{head}\n{rule}");
         for name in &self.contestants {
-            let mut t = super::check::Counts::default();
+            let mut t = super::model::Counts::default();
             for c in self.scenes.iter().flat_map(|s| &s.sets).flat_map(|x| &x.checks).filter(|c| &c.contestant == name)
             {
                 t.rays += c.rays;

@@ -1,10 +1,12 @@
 //! The scenes of the peers benchmark: the paper's random triangles at a fixed size and at a size
 //! that shrinks with the count, the bundled bunny, and meshes given by path (a real scan).
 
-use super::Tri;
 use anyhow::Context as _;
 use std::path::{Path, PathBuf};
 use vlf_bake::generate::{DEFAULT_TRIANGLE_SIZE, random_cube};
+
+/// A triangle as every contestant takes it.
+pub type Tri = [[f32; 3]; 3];
 
 /// How the random triangles' size follows their count.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
