@@ -54,10 +54,10 @@ pub(crate) fn pass_mask(lanes: &[[u8; 16]; 4], limits: Limits) -> u32 {
 
 /// The triangle ids of the refs of a leaf of a block whose boxes pass `limits`, in ref order.
 pub(crate) struct Passing<'a> {
-    /// The leaf's bytes from its first box array on ([`Block::leaf_bytes`]).
+    /// The leaf's bytes from its first box array on ([`Block::leaf_bytes`]): box array `a` at
+    /// `a · len`, the ids at `4 · len`.
     bytes: &'a [u8],
     len: usize,
-    ids: &'a [u32],
     limits: Limits,
     /// First ref of the current group of sixteen.
     group: usize,
@@ -68,24 +68,26 @@ pub(crate) struct Passing<'a> {
 impl<'a> Passing<'a> {
     #[inline(always)]
     pub(crate) fn new(block: &Block<'a>, leaf: LeafRefs, limits: Limits) -> Self {
-        let (bytes, ids) = (block.leaf_bytes(leaf), block.ids(leaf));
-        let mut p = Passing { bytes, len: leaf.len, ids, limits, group: 0, mask: 0 };
+        let mut p = Passing { bytes: block.leaf_bytes(leaf), len: leaf.len, limits, group: 0, mask: 0 };
         p.fill();
         p
     }
 
-    /// Sixteen bytes of box array `a` from the current group on, 255 past the section's end.
+    /// Sixteen bytes of each box array from the current group on, 255 past the section's end.
     #[inline(always)]
-    fn lane(&self, a: usize) -> [u8; 16] {
-        let at = a * self.len + self.group;
-        match self.bytes.get(at..at + 16) {
-            Some(lane) => lane.try_into().expect("16 bytes"),
-            None => {
+    fn lanes(&self) -> [[u8; 16]; 4] {
+        let (at, len) = (self.group, self.len);
+        let lane = |from: &[u8], a: usize| -> [u8; 16] { from[a * len..a * len + 16].try_into().expect("16 bytes") };
+        match self.bytes.get(at..at + 3 * len + 16) {
+            // One bounds check for the four arrays (the last one's lane may run into the ids).
+            Some(window) => [lane(window, 0), lane(window, 1), lane(window, 2), lane(window, 3)],
+            None => std::array::from_fn(|a| {
                 let mut lane = [255u8; 16];
-                let tail = self.bytes.get(at..).unwrap_or(&[]);
-                lane[..tail.len()].copy_from_slice(tail);
+                let tail = self.bytes.get(at + a * len..).unwrap_or(&[]);
+                let n = tail.len().min(16);
+                lane[..n].copy_from_slice(&tail[..n]);
                 lane
-            }
+            }),
         }
     }
 
@@ -93,10 +95,9 @@ impl<'a> Passing<'a> {
     #[inline(always)]
     fn fill(&mut self) {
         while self.group < self.len {
-            let lanes = [self.lane(0), self.lane(1), self.lane(2), self.lane(3)];
             let left = self.len - self.group;
             let valid = if left >= 16 { 0xffff } else { (1u32 << left) - 1 };
-            self.mask = pass_mask(&lanes, self.limits) & valid;
+            self.mask = pass_mask(&self.lanes(), self.limits) & valid;
             if self.mask != 0 {
                 return;
             }
@@ -119,7 +120,8 @@ impl Iterator for Passing<'_> {
             self.group += 16;
             self.fill();
         }
-        self.ids.get(i).copied()
+        let at = 4 * (self.len + i);
+        Some(u32::from_le_bytes(self.bytes.get(at..at + 4)?.try_into().ok()?))
     }
 }
 

@@ -58,6 +58,7 @@
 #![deny(missing_docs)]
 
 mod filter;
+mod prefetch;
 mod query;
 mod scene;
 

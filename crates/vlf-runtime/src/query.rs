@@ -26,10 +26,10 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use crate::filter::{Passing, limits};
+use crate::prefetch::prefetch;
 use vlf_format::block::{BOX_CELLS, Block, LeafRefs};
 use vlf_format::{BeamRecord, EMPTY_TILE, FieldReader, LOOKUP_FLIP, LOOKUP_NONE, TriangleRecord, Z_LEVELS};
 use vlf_geom::frame::mul;
-use vlf_geom::lattice::candidates;
 use vlf_geom::{Closest, Counter, Hit, Ray, TriRay, Triangles};
 
 /// The field's TRIANGLES section as the leaf kernel reads it.
@@ -56,7 +56,6 @@ pub struct FieldView<'a> {
     center: [f64; 3],
     radius: f64,
     margin: f64,
-    clip_radius_sq: f64,
     /// The scene's box relative to the centre, grown by the margin.
     box_lo: [f64; 3],
     box_hi: [f64; 3],
@@ -76,12 +75,56 @@ struct Setup {
     /// The parameter range inside the (grown) scene and `[tmin, tmax]`.
     t0: f64,
     t1: f64,
+    /// The beam coordinate in quantized levels (`formats/vlf.md` §5.6): `oq + t·dq`, and
+    /// `1 / dq`; `up` if it grows along the ray.
+    oq: f64,
+    dq: f64,
+    inv_dq: f64,
+    up: bool,
+}
+
+/// The smaller of an interval end `a` and `b`; a NaN `b` (a lying file) leaves `a`.
+#[inline(always)]
+fn lower(a: f64, b: f64) -> f64 {
+    if b < a { b } else { a }
+}
+
+/// The larger of an interval end `a` and `b`; a NaN `b` leaves `a`.
+#[inline(always)]
+fn higher(a: f64, b: f64) -> f64 {
+    if b > a { b } else { a }
 }
 
 /// What to do after a leaf.
 enum Visit {
     Continue,
     Done,
+}
+
+/// The ray over one tile in the tile's box cells (`formats/vlf.md` §5.6): its position is
+/// `o + t·d` cells from the tile's corner, and `margin` is the margin `μ` in cells.
+#[derive(Clone, Copy)]
+struct CellRay {
+    o: [f64; 2],
+    d: [f64; 2],
+    margin: f64,
+}
+
+impl CellRay {
+    /// The limits of the box of cells the ray passes over `[t_a, t_b]`, grown by the margin.
+    #[inline(always)]
+    fn limits(&self, t_a: f64, t_b: f64) -> crate::filter::Limits {
+        // Casts saturate: below 0 gives cell 0, above 255 cell 255 (and a NaN from a lying file
+        // cell 0).
+        const _: () = assert!(BOX_CELLS == 256, "cells are u8");
+        let cell = |v: f64| v as u8;
+        let (o, d, mu) = (self.o, self.d, self.margin);
+        let (xa, xb) = (o[0] + t_a * d[0], o[0] + t_b * d[0]);
+        let (ya, yb) = (o[1] + t_a * d[1], o[1] + t_b * d[1]);
+        let (x_lo, x_hi) = if xa < xb { (xa, xb) } else { (xb, xa) };
+        let (y_lo, y_hi) = if ya < yb { (ya, yb) } else { (yb, ya) };
+        limits(cell(x_lo - mu), cell(x_hi + mu), cell(y_lo - mu), cell(y_hi + mu))
+    }
 }
 
 /// What a visit of a leaf sees: the tile's block, the leaf's refs, and where the ray is.
@@ -91,11 +134,7 @@ struct Leaf<'b, 'a> {
     /// The ray parameters at which the ray enters and leaves the leaf.
     enter_t: f64,
     exit_t: f64,
-    /// The ray in canonical coordinates relative to the tile's corner, and the box-cell scale.
-    o: [f64; 2],
-    d: [f64; 2],
-    cells_per_unit: f64,
-    margin: f64,
+    ray: CellRay,
 }
 
 impl<'a> Leaf<'_, 'a> {
@@ -103,12 +142,7 @@ impl<'a> Leaf<'_, 'a> {
     /// leaf, or the part of it before the best hit so far), grown by the margin.
     #[inline(always)]
     fn passing(&self, t_far: f64) -> Passing<'a> {
-        let cell = |v: f64| ((v * self.cells_per_unit) as i64).clamp(0, BOX_CELLS as i64 - 1) as u8;
-        let (mu, o, d) = (self.margin, self.o, self.d);
-        let (xa, xb) = (o[0] + self.enter_t * d[0], o[0] + t_far * d[0]);
-        let (ya, yb) = (o[1] + self.enter_t * d[1], o[1] + t_far * d[1]);
-        let limits = limits(cell(xa.min(xb) - mu), cell(xa.max(xb) + mu), cell(ya.min(yb) - mu), cell(ya.max(yb) + mu));
-        Passing::new(self.block, self.refs, limits)
+        Passing::new(self.block, self.refs, self.ray.limits(self.enter_t, t_far))
     }
 }
 
@@ -117,7 +151,6 @@ impl<'a> FieldView<'a> {
         let p = reader.params;
         let s = reader.scene;
         let n = p.tile_resolution as usize;
-        let grown = s.radius + p.margin;
         let tile_width = 2.0 * s.radius / n as f64;
         FieldView {
             reader,
@@ -126,7 +159,6 @@ impl<'a> FieldView<'a> {
             center: s.center,
             radius: s.radius,
             margin: p.margin,
-            clip_radius_sq: grown * grown,
             box_lo: s.aabb_min.map(|v| v - p.margin),
             box_hi: s.aabb_max.map(|v| v + p.margin),
             tile_width,
@@ -143,20 +175,32 @@ impl<'a> FieldView<'a> {
     }
 
     /// The stored direction for ray direction `d` and the sign (+1 or −1) that makes the beam
-    /// direction point the same way as `d`. Constant time: one division, three dot products.
-    /// `None` only if the file's lookup table lies (points at no stored direction).
+    /// direction point the same way as `d`. Constant time: one division, at most three dot
+    /// products (`formats/vlf.md` §5.3). `None` only if the file's lookup table lies (points at no
+    /// stored direction).
     #[inline]
     pub fn select_direction(&self, d: [f64; 3]) -> Option<(usize, f64)> {
         let sigma = if d[2] < 0.0 { -1.0 } else { 1.0 };
         let q = [d[0] * sigma, d[1] * sigma, d[2] * sigma];
-        let n = self.lattice_n as i32;
+        let (ax, ay) = (q[0].abs(), q[1].abs());
+        let n = self.lattice_n as i64;
+        let nf = n as f64;
+        let scale = nf / (ax + ay + q[2]);
+        let (u, v) = ((ax * scale).min(nf), (ay * scale).min(nf));
+        // Truncation is floor for these non-negative values (no libm call).
+        let (i, k) = (u as i64, v as i64);
+        let lower = (u - i as f64) + (v - k as f64) < 1.0;
+        let cells = if lower { [(i, k), (i + 1, k), (i, k + 1)] } else { [(i + 1, k), (i, k + 1), (i + 1, k + 1)] };
+        let (sx, sy) = (if q[0] < 0.0 { -1 } else { 1 }, if q[1] < 0.0 { -1 } else { 1 });
         let side = 2 * n + 1;
+        let entry_at = |ci: i64, ck: i64| self.reader.lookup.get(((sy * ck + n) * side + (sx * ci + n)) as usize);
         let mut best: Option<(usize, f64)> = None;
         let mut best_dot = f64::NEG_INFINITY;
-        for &(i, k) in candidates(self.lattice_n, q[0].abs(), q[1].abs(), q[2]).as_slice() {
-            let a = if q[0] < 0.0 { -(i as i32) } else { i as i32 };
-            let b = if q[1] < 0.0 { -(k as i32) } else { k as i32 };
-            let Some(&entry) = self.reader.lookup.get(((b + n) * side + (a + n)) as usize) else { continue };
+        for (ci, ck) in cells {
+            if ci + ck > n {
+                continue;
+            }
+            let Some(&entry) = entry_at(ci, ck) else { continue };
             if entry == LOOKUP_NONE {
                 continue;
             }
@@ -167,6 +211,15 @@ impl<'a> FieldView<'a> {
             if dot > best_dot {
                 best_dot = dot;
                 best = Some((j, sigma * s));
+            }
+        }
+        if best.is_none() {
+            // Only reachable through rounding at the rim: the clamped corner is a lattice point.
+            let ci = i.min(n);
+            let entry = *entry_at(ci, k.min(n - ci))?;
+            let j = (entry & !LOOKUP_FLIP) as usize;
+            if entry != LOOKUP_NONE && j < self.reader.directions.len() {
+                best = Some((j, if entry & LOOKUP_FLIP != 0 { -sigma } else { sigma }));
             }
         }
         best
@@ -181,27 +234,20 @@ impl<'a> FieldView<'a> {
         }
         let d = ray.dir.map(f64::from);
         let oc: [f64; 3] = std::array::from_fn(|i| ray.org[i] as f64 - origin[i]);
-        // Clip to the bounding sphere grown by the margin, with the cancellation-free quadratic.
-        let a = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-        let b = oc[0] * d[0] + oc[1] * d[1] + oc[2] * d[2];
-        let c = oc[0] * oc[0] + oc[1] * oc[1] + oc[2] * oc[2] - self.clip_radius_sq;
-        let disc = b * b - a * c;
-        if !(disc >= 0.0) {
-            return None;
-        }
-        let q = -(b + disc.sqrt().copysign(b));
-        let (r0, r1) = if q == 0.0 { (0.0, 0.0) } else { (q / a, c / q) };
-        let mut t0 = r0.min(r1).max(ray.tmin as f64);
-        let mut t1 = r0.max(r1).min(ray.tmax as f64);
-        // Then to the scene's box: rays from outside start where the scene starts. (`max` and
-        // `min` ignore a NaN from `0 · ∞`, which leaves the interval as it was: conservative.)
+        // Clip to the scene's box grown by the margin: rays from outside start where the scene
+        // starts. (Every point of the box that is outside the bounding sphere holds no triangle;
+        // the walk clamps it to the grid.) `max` and `min` ignore a NaN from `0 · ∞`, which
+        // leaves the interval as it was: conservative.
+        let mut t0 = ray.tmin as f64;
+        let mut t1 = ray.tmax as f64;
         for k in 0..3 {
             if d[k] != 0.0 {
                 let inv = 1.0 / d[k];
                 let ta = (self.box_lo[k] - oc[k]) * inv;
                 let tb = (self.box_hi[k] - oc[k]) * inv;
-                t0 = t0.max(ta.min(tb));
-                t1 = t1.min(ta.max(tb));
+                let (near, far) = if inv < 0.0 { (tb, ta) } else { (ta, tb) };
+                t0 = higher(t0, near);
+                t1 = lower(t1, far);
             } else if !(oc[k] >= self.box_lo[k] && oc[k] <= self.box_hi[k]) {
                 return None;
             }
@@ -217,7 +263,9 @@ impl<'a> FieldView<'a> {
         if !(dc[2] * sign > 0.0) || !o.iter().chain(&dc).all(|v| v.is_finite()) {
             return None;
         }
-        Some(Setup { dir, o, d: dc, t0, t1 })
+        let inv_step = 1.0 / self.z_step;
+        let (oq, dq) = ((o[2] + self.radius) * inv_step, dc[2] * inv_step);
+        Some(Setup { dir, o, d: dc, t0, t1, oq, dq, inv_dq: 1.0 / dq, up: dq > 0.0 })
     }
 
     /// The closest hit on `[tmin, tmax]` of a ray in world coordinates, or `None`:
@@ -267,7 +315,7 @@ impl<'a> FieldView<'a> {
         let tris = FieldTriangles(self.reader.triangles);
         let mut best = Closest::new(ray.tmax);
         self.walk(&setup, counter, |leaf, counter| {
-            let t_far = leaf.exit_t.min(best.tmax as f64);
+            let t_far = lower(leaf.exit_t, best.tmax as f64);
             tri_ray.closest_in(&tris, leaf.passing(t_far), &mut best, counter);
             // Final once the best hit lies within the part of the ray already searched.
             if best.hit.is_some() && (best.tmax as f64) <= leaf.exit_t { Visit::Done } else { Visit::Continue }
@@ -331,8 +379,21 @@ impl<'a> FieldView<'a> {
         let mut t_enter = s.t0;
         // Each step moves one axis monotonically, so 2n + 1 visits cover any segment.
         for _ in 0..=2 * n {
-            let t_exit = next_x.min(next_y).min(s.t1);
+            let t_exit = lower(lower(next_x, next_y), s.t1);
             counter.cell();
+            // Start loading the next tile's block while this one is visited.
+            if t_exit < s.t1 {
+                let (nx, ny) = if next_x <= next_y { (ix + step_x, iy) } else { (ix, iy + step_y) };
+                if (0..n).contains(&nx) && (0..n).contains(&ny) {
+                    if let Some(&next) = self.reader.tiles.get(tiles_of_dir + ny as usize * self.n + nx as usize) {
+                        if let Some(word) =
+                            self.reader.leaves.get((beam.leaves_base as usize).wrapping_add(next as usize))
+                        {
+                            prefetch(word);
+                        }
+                    }
+                }
+            }
             if let Some(&entry) = self.reader.tiles.get(tiles_of_dir + iy as usize * self.n + ix as usize) {
                 if entry != EMPTY_TILE {
                     if let Some(block) = self.block(beam, entry) {
@@ -384,38 +445,46 @@ impl<'a> FieldView<'a> {
     ) -> Visit {
         let bounds = block.bounds();
         let k = block.leaf_count();
-        // The beam coordinate in quantized levels: the ray's level at t is `oq + t · dq`.
-        let inv_step = 1.0 / self.z_step;
-        let (oq, dq) = ((s.o[2] + self.radius) * inv_step, s.d[2] * inv_step);
-        let inv_dq = 1.0 / dq;
-        let t_at = |level: u16| (level as f64 - oq) * inv_dq;
+        let t_at = |level: u16| (level as f64 - s.oq) * s.inv_dq;
         // The parameter range over which the ray is within the tile's z range.
-        let up = dq > 0.0;
+        let up = s.up;
         let (ta, tb) = if up { (t_at(bounds[0]), t_at(bounds[k])) } else { (t_at(bounds[k]), t_at(bounds[0])) };
-        let lo = t_enter.max(ta);
-        let hi = t_exit.min(tb);
+        let lo = higher(t_enter, ta);
+        let hi = lower(t_exit, tb);
         if !(lo <= hi) {
             return Visit::Continue;
         }
         // The leaf holding the entry point: the leaves partition [bounds[0], bounds[K]] in order.
         // Going up, the first leaf whose top is not below it; going down, the last whose bottom
         // is not above it.
-        let q_in = oq + lo * dq;
+        let q_in = s.oq + lo * s.dq;
         let inner = &bounds[1..k];
         let mut leaf = if up {
             inner.partition_point(|&b| (b as f64) < q_in)
         } else {
             inner.partition_point(|&b| (b as f64) <= q_in)
         };
-        let (o, d) = ([s.o[0] - corner[0], s.o[1] - corner[1]], [s.d[0], s.d[1]]);
+        let c = self.cells_per_unit;
+        let ray = CellRay {
+            o: [(s.o[0] - corner[0]) * c, (s.o[1] - corner[1]) * c],
+            d: [s.d[0] * c, s.d[1] * c],
+            margin: self.margin * c,
+        };
         let mut leaf_enter = lo;
         loop {
             let last = if up { leaf + 1 == k } else { leaf == 0 };
-            let exit_t = if last { hi } else { t_at(bounds[if up { leaf + 1 } else { leaf }]).min(hi) };
+            let exit_t = if last { hi } else { lower(t_at(bounds[if up { leaf + 1 } else { leaf }]), hi) };
             counter.leaf();
+            // Start loading the next leaf's boxes while this one is tested.
+            if !last {
+                if let Some(next) = block.leaf(if up { leaf + 1 } else { leaf - 1 }) {
+                    if let Some(b) = block.leaf_bytes(next).first() {
+                        prefetch(b);
+                    }
+                }
+            }
             if let Some(refs) = block.leaf(leaf).filter(|r| !r.is_empty()) {
-                let (cells_per_unit, margin) = (self.cells_per_unit, self.margin);
-                let l = Leaf { block, refs, enter_t: leaf_enter, exit_t, o, d, cells_per_unit, margin };
+                let l = Leaf { block, refs, enter_t: leaf_enter, exit_t, ray };
                 if let Visit::Done = visit(&l, counter) {
                     return Visit::Done;
                 }
