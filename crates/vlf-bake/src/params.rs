@@ -19,11 +19,15 @@ pub const MARGIN_FRACTION: f64 = 1.0 / (1u64 << 20) as f64;
 
 /// The default size budget for automatic parameters: 4 GiB.
 pub const DEFAULT_MAX_BYTES: u64 = 4 << 30;
-/// The default per-triangle allowance of automatic parameters: 16 KiB per triangle, so a field
-/// stays proportionate to its scene (the paper's fields were 10–25 KB per triangle). The parameter
-/// study (`docs/benchmarks/parameters.md`) found that past this size, fields mostly buy
-/// directions, which gain a few percent per fourfold size.
-pub const DEFAULT_MAX_BYTES_PER_TRIANGLE: u64 = 16 << 10;
+/// The default per-triangle allowance of automatic parameters: 1 KiB per triangle, so a field
+/// stays proportionate to its scene. The format 2.0 sweep (`docs/benchmarks/parameters.md`,
+/// 100K triangles) measured 764 B per triangle (19 directions × 64²) within 10% of the fastest
+/// field on outside and inside rays and as fast on incoherent ones, while fields of 2–4 KiB per
+/// triangle were no faster: their extra bytes cost cache misses that eat what the finer tiles save.
+pub const DEFAULT_MAX_BYTES_PER_TRIANGLE: u64 = 1 << 10;
+/// The smallest budget automatic parameters get, whatever the triangle count, so that a mesh of a
+/// few triangles still bakes (its fixed sections alone exceed a per-triangle allowance).
+pub const MIN_AUTOMATIC_BUDGET: u64 = 4 << 20;
 /// Default target of triangles per BSP leaf.
 pub const DEFAULT_LEAF_SIZE: u32 = 4;
 /// Default largest BSP depth.
@@ -33,13 +37,13 @@ pub const SPARSE_TILE_LOAD: f64 = 3.0;
 /// Directions baked to estimate a rung's size.
 const SAMPLE_DIRECTIONS: usize = 8;
 
-/// The ladder of automatic (lattice N, tiles n) rungs, coarse to fine. The parameter study on the
-/// 100K scene (`docs/benchmarks/parameters.md`) found frame time driven by the tile resolution
-/// (4.6× from 32² to 128²) and hardly by the directions once `N ≥ n/16` (10% from 129 to 513
-/// directions at 128², 4% from 513 to 2049), so the ladder refines tiles first and adds
-/// directions only to keep a ray's tile crossings (about `1 + 2n/N`) bounded.
-pub const LADDER: [(u32, u32); 9] =
-    [(2, 16), (4, 16), (4, 32), (8, 32), (8, 64), (8, 128), (16, 128), (16, 256), (32, 256)];
+/// The ladder of automatic (lattice N, tiles n) rungs, coarse to fine, from the format 2.0 sweep
+/// on random scenes of 100K triangles (`docs/benchmarks/parameters.md`): query time falls with the
+/// tiles up to 64² and not measurably beyond, and with the directions up to 19–33 (N = 3–4); past
+/// that (33 × 128², 51 directions, 256² tiles, depth 12) fields grow 1.5 to 4 times and are no
+/// faster or *slower*, their working set missing the caches. So the ladder refines tiles to 64² on
+/// 9 directions first, then adds directions, and ends where the sweep stopped finding speed.
+pub const LADDER: [(u32, u32); 5] = [(2, 16), (2, 32), (2, 64), (3, 64), (4, 64)];
 
 /// How a tile's z range is cut into leaves (`formats/vlf.md` §6.3, [`crate::leaves`]): a leaf of
 /// at most `leaf_size` refs is not split, and splits go at most `max_depth` deep (a tile has at
@@ -157,16 +161,18 @@ pub enum ParamsError {
     Budget,
     /// Explicit parameters whose field cannot fit `--max-bytes`, whatever the scene's shape.
     #[error(
-        "{directions} directions × {tiles}² tiles need at least {} for {triangles} triangles, over the --max-bytes budget of {}",
+        "{directions} directions × {tiles}² tiles need at least {} for {}, over the --max-bytes budget of {}",
         human_bytes(*.at_least),
+        count(*.triangles, "triangle", "triangles"),
         human_bytes(*.budget)
     )]
     ExplicitOverBudget { directions: u64, tiles: u32, triangles: u64, at_least: u64, budget: u64 },
     /// Not even the coarsest rung of the automatic search fits the budget.
     #[error(
-        "even the coarsest field ({directions} directions × {tiles}² tiles) does not fit the budget of {} for {triangles} triangles \
+        "even the coarsest field ({directions} directions × {tiles}² tiles) does not fit the budget of {} for {} \
          (--max-bytes {}, --max-bytes-per-triangle {}); raise them or give --directions and --tiles",
         human_bytes(*.budget),
+        count(*.triangles, "triangle", "triangles"),
         human_bytes(*.max_bytes),
         human_bytes(*.max_bytes_per_triangle)
     )]
@@ -234,7 +240,7 @@ pub fn choose<M: Measure>(scene: &M, config: &BakeConfig) -> Result<Choice, M::E
     // Explicit parameters are held to the absolute budget only; automatic ones also to the
     // per-triangle allowance.
     let budget = config.max_bytes;
-    let auto_budget = budget.min(config.max_bytes_per_triangle.saturating_mul(tris));
+    let auto_budget = budget.min(config.max_bytes_per_triangle.saturating_mul(tris).max(MIN_AUTOMATIC_BUDGET));
     let explicit_n = config.directions.map(|l| Lattice::with_at_least(l as u64).n);
     if let (Some(lattice_n), Some(tiles)) = (explicit_n, config.tiles) {
         let lb = lower_bound_bytes(tris, lattice_n, tiles);
@@ -307,13 +313,19 @@ pub fn choose<M: Measure>(scene: &M, config: &BakeConfig) -> Result<Choice, M::E
         estimated_bytes: Some(bytes),
         reason: format!(
             "chose {} directions × {}² tiles: estimated {} (budget {}: the smaller of --max-bytes and \
-             --max-bytes-per-triangle × {tris}), {load:.1} triangles per non-empty tile",
+             --max-bytes-per-triangle × {tris}, at least {}), {load:.1} triangles per non-empty tile",
             Lattice::new(params.lattice_n).direction_count(),
             params.tiles,
             human_bytes(bytes),
-            human_bytes(auto_budget)
+            human_bytes(auto_budget),
+            human_bytes(MIN_AUTOMATIC_BUDGET)
         ),
     })
+}
+
+/// `1 triangle`, `2 triangles`: a count and its noun, `many` unless the count is one.
+pub fn count(n: u64, one: &str, many: &str) -> String {
+    if n == 1 { format!("1 {one}") } else { format!("{n} {many}") }
 }
 
 /// `1.5 GiB`-style sizes.
@@ -333,21 +345,26 @@ mod tests {
     use super::*;
     use std::cell::RefCell;
 
-    /// A scene whose directions cost what a model says: `16 n² + 8 T + 200` bytes per direction
-    /// (above the lower bound, as real directions are), and `T / n²` triangles per non-empty tile
-    /// (at least one). Records every rung it is asked about.
+    /// A scene whose directions cost what a model says: `16 n² + b T + 200` bytes per direction
+    /// (above the lower bound, as real directions are; `b` = 8 unless said), and `T / n²`
+    /// triangles per non-empty tile (at least one). Records every rung it is asked about.
     struct Model {
         triangles: u64,
+        per_triangle: u64,
         sampled: RefCell<Vec<(u32, u32)>>,
     }
 
     impl Model {
         fn new(triangles: u64) -> Self {
-            Model { triangles, sampled: RefCell::new(Vec::new()) }
+            Model::with_bytes_per_triangle(triangles, 8)
+        }
+
+        fn with_bytes_per_triangle(triangles: u64, per_triangle: u64) -> Self {
+            Model { triangles, per_triangle, sampled: RefCell::new(Vec::new()) }
         }
 
         fn bytes_per_direction(&self, tiles: u32) -> u64 {
-            16 * tiles as u64 * tiles as u64 + 8 * self.triangles + 200
+            16 * tiles as u64 * tiles as u64 + self.per_triangle * self.triangles + 200
         }
 
         fn load(&self, tiles: u32) -> f64 {
@@ -454,9 +471,9 @@ mod tests {
         assert!(choice.automatic);
         assert_eq!(choice.estimated_bytes, Some(budget));
         assert_eq!(choice.params.margin, 2.0 * MARGIN_FRACTION);
-        // The next rung was estimated and found over the budget; none beyond it.
-        assert_eq!(model.sampled(), LADDER[..5]);
-        assert!(choice.reason.starts_with("chose 129 directions × 32² tiles: estimated "), "{}", choice.reason);
+        // The next rung was ruled out, by its lower bound before any estimate; none beyond it.
+        assert_eq!(model.sampled(), LADDER[..4]);
+        assert!(choice.reason.starts_with("chose 19 directions × 64² tiles: estimated "), "{}", choice.reason);
         // A budget one byte smaller stops a rung earlier.
         let choice = choose(&Model::new(10_000_000), &automatic(budget - 1)).unwrap();
         assert_eq!((choice.params.lattice_n, choice.params.tiles), LADDER[2]);
@@ -467,8 +484,8 @@ mod tests {
         // 3 × 64² triangles: three per tile at 64² tiles.
         let model = Model::new(3 * 64 * 64);
         let choice = choose(&model, &automatic(u64::MAX / 2)).unwrap();
-        assert_eq!((choice.params.lattice_n, choice.params.tiles), (8, 64));
-        assert_eq!(model.sampled(), LADDER[..5], "nothing finer is estimated");
+        assert_eq!((choice.params.lattice_n, choice.params.tiles), (2, 64));
+        assert_eq!(model.sampled(), LADDER[..3], "nothing finer is estimated");
         assert!(choice.reason.ends_with(", 3.0 triangles per non-empty tile"), "{}", choice.reason);
     }
 
@@ -484,6 +501,35 @@ mod tests {
         // Explicit parameters are held to --max-bytes only.
         let explicit = BakeConfig { directions: Some(33), tiles: Some(256), ..config };
         assert_eq!(choose(&model, &explicit).unwrap().params.tiles, 256);
+    }
+
+    #[test]
+    fn a_mesh_of_a_few_triangles_bakes_at_the_default_budget() {
+        // One triangle's allowance (1 KiB) is below any field's fixed sections; the floor of the
+        // automatic budget lets it bake, and its single triangle stops the ladder at once.
+        for triangles in [1, 2, 12] {
+            let model = Model::new(triangles);
+            let choice = choose(&model, &BakeConfig::default()).unwrap();
+            assert_eq!((choice.params.lattice_n, choice.params.tiles), LADDER[0], "{triangles} triangles");
+            assert!(choice.estimated_bytes.unwrap() <= MIN_AUTOMATIC_BUDGET);
+        }
+        // The floor never lifts the automatic budget over --max-bytes.
+        let config = BakeConfig { max_bytes: 1000, ..BakeConfig::default() };
+        let e = choose(&Model::new(1), &config).unwrap_err();
+        assert!(matches!(e, ParamsError::NothingFits { budget: 1000, .. }), "{e:?}");
+        assert!(e.to_string().contains("for 1 triangle ("), "{e}");
+    }
+
+    #[test]
+    fn the_default_allowance_is_a_kibibyte_per_triangle_above_the_floor() {
+        let config = BakeConfig::default();
+        assert_eq!(config.max_bytes_per_triangle, 1024);
+        // 100K triangles costing 60 B each per direction, as the random scenes measure: 9 × 64²
+        // fits 1 KiB per triangle, 19 × 64² does not.
+        let model = Model::with_bytes_per_triangle(100_000, 60);
+        assert!(model.estimate(2, 64) <= 1024 * 100_000 && model.estimate(3, 64) > 1024 * 100_000);
+        let choice = choose(&model, &config).unwrap();
+        assert_eq!((choice.params.lattice_n, choice.params.tiles), (2, 64));
     }
 
     #[test]

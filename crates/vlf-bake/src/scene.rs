@@ -12,6 +12,7 @@
 //! are what the SCENE's counts, TRIANGLES, PROVENANCE, SOURCES, INPUTS, STRINGS, MATERIALS,
 //! CAMERAS and LIGHTS sections hold, and what the input hash covers.
 
+use crate::params::count;
 use std::collections::HashMap;
 use std::path::PathBuf;
 use vlf_format::{
@@ -414,9 +415,4 @@ fn zero_area(v: &[[f64; 3]; 3]) -> bool {
     let e2: [f64; 3] = std::array::from_fn(|i| v[2][i] - v[0][i]);
     let c = [e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]];
     c == [0.0; 3]
-}
-
-/// `"1 triangle"`, `"2 triangles"`.
-pub fn count(n: u64, one: &str, many: &str) -> String {
-    if n == 1 { format!("1 {one}") } else { format!("{n} {many}") }
 }

@@ -149,7 +149,7 @@ struct PeersArgs {
     #[arg(long)]
     sweep: bool,
     /// The sweep's settings, DIRECTIONSxTILES.
-    #[arg(long, value_delimiter = ',', default_values = ["33x32", "129x64", "129x128", "513x128"], value_parser = parse_setting)]
+    #[arg(long, value_delimiter = ',', default_values = ["9x32", "9x64", "19x64", "33x64", "33x128"], value_parser = parse_setting)]
     sweep_params: Vec<(u32, u32)>,
     /// Keep the baked fields in --work.
     #[arg(long)]

@@ -90,8 +90,9 @@ pub struct BakeArgs {
     /// parameters stops, leaving nothing behind, as soon as its field would exceed it (e.g. 4GiB, 512MiB, 1e9).
     #[arg(long, default_value = "4GiB", value_parser = size(), value_name = "SIZE", allow_negative_numbers = true)]
     pub max_bytes: u64,
-    /// Automatic parameters aim at no more than this many bytes of field per triangle.
-    #[arg(long, default_value = "16KiB", value_parser = size(), value_name = "SIZE", allow_negative_numbers = true)]
+    /// Automatic parameters aim at no more than this many bytes of field per triangle (a mesh of a
+    /// few triangles still gets 4 MiB, so that it always bakes).
+    #[arg(long, default_value = "1KiB", value_parser = size(), value_name = "SIZE", allow_negative_numbers = true)]
     pub max_bytes_per_triangle: u64,
     /// Worker threads, 1 to 1024; more than the cores available are reduced to them, with a warning
     /// (default: RAYON_NUM_THREADS, else all cores). The output does not depend on it.
@@ -453,5 +454,19 @@ mod tests {
                 panic!("{args:?}: {e}");
             }
         }
+    }
+
+    /// The bake's flags default to the library's defaults, so the CLI, the C API and the Python
+    /// package bake the same field from the same mesh.
+    #[test]
+    fn bake_defaults_are_the_library_defaults() {
+        let Command::Bake(a) = Cli::try_parse_from(["vlf-bake", "bake", "m.obj", "-o", "f.vlf"]).unwrap().command
+        else {
+            panic!("not a bake");
+        };
+        let d = vlf_bake::BakeConfig::default();
+        assert_eq!((a.max_bytes, a.max_bytes_per_triangle), (d.max_bytes, d.max_bytes_per_triangle));
+        assert_eq!((a.leaf_size, a.max_depth), (d.depth.leaf_size, d.depth.max_depth));
+        assert_eq!((a.directions, a.tiles), (d.directions, d.tiles));
     }
 }

@@ -928,7 +928,7 @@ fn render_uses_the_fields_gltf_camera_and_lights_and_not_the_thread_count() {
     let field = dir.path().join("cornell.vlf");
     bake(&[&mesh("cornell/cornell.gltf")], &field, &["-q"]).ok();
     let r = vlf(&["dump", s(&field)]).ok();
-    assert!(r.stdout.contains("7 materials, 1 cameras, 2 lights"), "{}", r.stdout);
+    assert!(r.stdout.contains("7 materials, 1 camera, 2 lights"), "{}", r.stdout);
 
     // The camera's aspect ratio (4:3) sets the height.
     let one = dir.path().join("one.png");

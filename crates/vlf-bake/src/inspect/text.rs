@@ -1,7 +1,7 @@
 //! The text form of a [`Description`]: what `vlf-bake dump` prints without `--json`.
 
 use super::Description;
-use crate::params::human_bytes;
+use crate::params::{count, human_bytes};
 
 /// The text `vlf-bake dump` prints for a field: header, scene, parameters, statistics and
 /// sections, one fact per line, without a final newline.
@@ -32,11 +32,19 @@ pub fn describe_text(d: &Description) -> String {
     ));
     line(format!("  bounds        {:?} .. {:?}", d.aabb_min, d.aabb_max));
     for i in &d.inputs {
-        line(format!("  input         {} ({} triangles, blake3 {})", i.name, i.triangles, &i.file_hash[..16]));
+        line(format!(
+            "  input         {} ({}, blake3 {})",
+            i.name,
+            count(i.triangles, "triangle", "triangles"),
+            &i.file_hash[..16]
+        ));
     }
     line(format!(
-        "  rendering     {} materials, {} cameras, {} lights ({} sources)",
-        d.materials, d.cameras, d.lights, d.sources
+        "  rendering     {}, {}, {} ({})",
+        count(d.materials as u64, "material", "materials"),
+        count(d.cameras as u64, "camera", "cameras"),
+        count(d.lights as u64, "light", "lights"),
+        count(d.sources as u64, "source", "sources")
     ));
     line("parameters".into());
     let req = |v: Option<u32>| v.map_or("automatic".to_string(), |v| format!("requested {v}"));

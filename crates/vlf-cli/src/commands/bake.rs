@@ -5,7 +5,7 @@ use crate::args::BakeArgs;
 use crate::progress::Bar;
 use anyhow::{Context, Result};
 use vlf_bake::job::{BakeJob, run_bake_job};
-use vlf_bake::params::human_bytes;
+use vlf_bake::params::{count, human_bytes};
 use vlf_bake::{BakeConfig, DepthPolicy};
 
 /// `vlf-bake bake`: runs the bake job and prints its summary.
@@ -70,9 +70,9 @@ pub fn run(a: &BakeArgs) -> Result<()> {
             None => format!("in {:.2} s", s.seconds),
         };
         let mut text = format!(
-            "baked {}: {} triangles, {what} × {}² tiles, {} ({} bytes) {how}\n  content hash {}\n  input hash   {}",
+            "baked {}: {}, {what} × {}² tiles, {} ({} bytes) {how}\n  content hash {}\n  input hash   {}",
             s.output.display(),
-            s.triangles,
+            count(s.triangles, "triangle", "triangles"),
             s.tile_resolution,
             human_bytes(s.bytes),
             s.bytes,

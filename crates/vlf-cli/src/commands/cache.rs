@@ -5,7 +5,7 @@ use crate::args::{CacheAction, CacheArgs};
 use anyhow::{Context, Result, bail};
 use std::path::PathBuf;
 use vlf_bake::cache::{CACHE_DIR_ENV, Cache};
-use vlf_bake::params::human_bytes;
+use vlf_bake::params::{count, human_bytes};
 
 /// `vlf-bake cache list|verify|prune`.
 pub fn run(a: &CacheArgs) -> Result<()> {
@@ -24,12 +24,17 @@ pub fn run(a: &CacheArgs) -> Result<()> {
                 return stdout_line(&serde_json::to_string_pretty(&entries)?);
             }
             let total: u64 = entries.iter().map(|e| e.bytes).sum();
-            let mut text = format!("{} entries, {} in {}", entries.len(), human_bytes(total), dir.display());
+            let mut text = format!(
+                "{}, {} in {}",
+                count(entries.len() as u64, "entry", "entries"),
+                human_bytes(total),
+                dir.display()
+            );
             for e in &entries {
                 let what = match (&e.field, &e.problem) {
                     (Some(f), _) => format!(
-                        "{} triangles, {} directions × {}² tiles, format {}, from {}",
-                        f.triangles,
+                        "{}, {} directions × {}² tiles, format {}, from {}",
+                        count(f.triangles, "triangle", "triangles"),
                         f.directions,
                         f.tile_resolution,
                         f.format_version,
