@@ -613,6 +613,45 @@ VlfStatus vlf_closest_hit(const struct VlfField *field,
 VlfStatus vlf_any_hit(const struct VlfField *field, const struct VlfRay *ray, uint8_t *hit);
 
 /**
+ * The point the field's triangles are stored relative to (the centre of its scene), in world
+ * coordinates, written to `origin[0..3]`. Rays given relative to it (`vlf_closest_hit_local`,
+ * `vlf_any_hit_local`) keep their precision in scenes far from the world's origin, where a
+ * float world origin cannot be precise.
+ *
+ * Returns `VLF_OK`, `VLF_ERR_NULL_ARGUMENT`, or `VLF_ERR_INVALID_ARGUMENT` (a misaligned pointer).
+ *
+ * # Safety
+ * `field` must be NULL or an open handle; `origin` NULL or room for 3 doubles.
+ */
+VlfStatus vlf_origin(const struct VlfField *field, double *origin);
+
+/**
+ * `vlf_closest_hit` for a ray whose origin is given relative to `vlf_origin` (subtract it, in
+ * double precision, before rounding to float). `t`, `u`, `v` and `prim` mean what they mean for
+ * world rays; the same answer, bit for bit, as the Rust `Field::closest_hit_local`.
+ *
+ * Returns `VLF_OK` (hit or miss), `VLF_ERR_NULL_ARGUMENT`, or `VLF_ERR_INVALID_ARGUMENT` (a
+ * misaligned pointer).
+ *
+ * # Safety
+ * `field` must be NULL or an open handle; `ray` NULL or a valid ray; `hit` NULL or writable.
+ */
+VlfStatus vlf_closest_hit_local(const struct VlfField *field,
+                                const struct VlfRay *ray,
+                                struct VlfHit *hit);
+
+/**
+ * `vlf_any_hit` for a ray whose origin is given relative to `vlf_origin`.
+ *
+ * Returns `VLF_OK` (hit or miss), `VLF_ERR_NULL_ARGUMENT`, or `VLF_ERR_INVALID_ARGUMENT` (a
+ * misaligned pointer).
+ *
+ * # Safety
+ * `field` must be NULL or an open handle; `ray` NULL or a valid ray; `hit` NULL or writable.
+ */
+VlfStatus vlf_any_hit_local(const struct VlfField *field, const struct VlfRay *ray, uint8_t *hit);
+
+/**
  * Traces `n` rays: `hits[i]` receives the closest hit of `rays[i]` (the miss record if none), as
  * `vlf_closest_hit` would. Runs on the calling thread; to use several cores, call it from several
  * threads on disjoint parts of the arrays.

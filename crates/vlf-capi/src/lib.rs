@@ -330,6 +330,66 @@ pub unsafe extern "C" fn vlf_any_hit(field: *const VlfField, ray: *const VlfRay,
     })
 }
 
+/// The point the field's triangles are stored relative to (the centre of its scene), in world
+/// coordinates, written to `origin[0..3]`. Rays given relative to it (`vlf_closest_hit_local`,
+/// `vlf_any_hit_local`) keep their precision in scenes far from the world's origin, where a
+/// float world origin cannot be precise.
+///
+/// Returns `VLF_OK`, `VLF_ERR_NULL_ARGUMENT`, or `VLF_ERR_INVALID_ARGUMENT` (a misaligned pointer).
+///
+/// # Safety
+/// `field` must be NULL or an open handle; `origin` NULL or room for 3 doubles.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn vlf_origin(field: *const VlfField, origin: *mut f64) -> VlfStatus {
+    call("vlf_origin", || {
+        // SAFETY: the caller's promises, argument by argument.
+        let (field, origin) = unsafe { (field_arg(field)?, slice_out(origin, 3, "origin")?) };
+        write_all(origin, &field.origin());
+        Ok(())
+    })
+}
+
+/// `vlf_closest_hit` for a ray whose origin is given relative to `vlf_origin` (subtract it, in
+/// double precision, before rounding to float). `t`, `u`, `v` and `prim` mean what they mean for
+/// world rays; the same answer, bit for bit, as the Rust `Field::closest_hit_local`.
+///
+/// Returns `VLF_OK` (hit or miss), `VLF_ERR_NULL_ARGUMENT`, or `VLF_ERR_INVALID_ARGUMENT` (a
+/// misaligned pointer).
+///
+/// # Safety
+/// `field` must be NULL or an open handle; `ray` NULL or a valid ray; `hit` NULL or writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn vlf_closest_hit_local(
+    field: *const VlfField,
+    ray: *const VlfRay,
+    hit: *mut VlfHit,
+) -> VlfStatus {
+    call("vlf_closest_hit_local", || {
+        // SAFETY: the caller's promises, argument by argument.
+        let (field, ray, hit) = unsafe { (field_arg(field)?, arg(ray, "ray")?, out(hit, "hit")?) };
+        let h = Hit::record(field.closest_hit_local(bytemuck::cast_ref(ray)));
+        hit.write(bytemuck::cast(h));
+        Ok(())
+    })
+}
+
+/// `vlf_any_hit` for a ray whose origin is given relative to `vlf_origin`.
+///
+/// Returns `VLF_OK` (hit or miss), `VLF_ERR_NULL_ARGUMENT`, or `VLF_ERR_INVALID_ARGUMENT` (a
+/// misaligned pointer).
+///
+/// # Safety
+/// `field` must be NULL or an open handle; `ray` NULL or a valid ray; `hit` NULL or writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn vlf_any_hit_local(field: *const VlfField, ray: *const VlfRay, hit: *mut u8) -> VlfStatus {
+    call("vlf_any_hit_local", || {
+        // SAFETY: the caller's promises, argument by argument.
+        let (field, ray, hit) = unsafe { (field_arg(field)?, arg(ray, "ray")?, out(hit, "hit")?) };
+        hit.write(field.any_hit_local(bytemuck::cast_ref(ray)) as u8);
+        Ok(())
+    })
+}
+
 /// Traces `n` rays: `hits[i]` receives the closest hit of `rays[i]` (the miss record if none), as
 /// `vlf_closest_hit` would. Runs on the calling thread; to use several cores, call it from several
 /// threads on disjoint parts of the arrays.

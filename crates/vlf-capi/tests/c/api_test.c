@@ -366,6 +366,24 @@ int main(int argc, char **argv) {
     }
     CHECK(vlf_closest_hit(field, &ray, &hit) == VLF_OK && hit.prim < triangles && hit.t > 0.0f && hit.t <= 1.0001f);
     CHECK(vlf_any_hit(field, &ray, &any) == VLF_OK && any == 1);
+    /* The same ray given relative to the field's origin (the scene's centre) finds the same
+     * triangle at the same distance, up to the rounding of the moved origin. */
+    {
+        VlfRay local = ray;
+        VlfHit local_hit;
+        double origin[3];
+        CHECK(vlf_origin(field, origin) == VLF_OK);
+        for (i = 0; i < 3; i++) {
+            CHECK(fabs(origin[i] - center[i]) <= 1e-9 * (1.0 + radius));
+            local.org[i] = (float)((double)ray.org[i] - origin[i]);
+        }
+        CHECK(vlf_closest_hit_local(field, &local, &local_hit) == VLF_OK && local_hit.prim == hit.prim &&
+              fabsf(local_hit.t - hit.t) <= 1e-4f);
+        CHECK(vlf_any_hit_local(field, &local, &any) == VLF_OK && any == 1);
+        CHECK(vlf_origin(field, NULL) == VLF_ERR_NULL_ARGUMENT && message_has("`origin` is null"));
+        CHECK(vlf_closest_hit_local(field, NULL, &local_hit) == VLF_ERR_NULL_ARGUMENT);
+        CHECK(vlf_any_hit_local(NULL, &local, &any) == VLF_ERR_NULL_ARGUMENT);
+    }
     /* The same ray, reversed, leaves the sphere: a miss, not an error. */
     for (i = 0; i < 3; i++) {
         ray.dir[i] = -ray.dir[i];
