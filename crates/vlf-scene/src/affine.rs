@@ -1,6 +1,9 @@
 //! Affine transforms: rotation, non-uniform scale, mirroring, shear and translation, as a 3×4
 //! matrix in f64, and the boxes and rays they move.
 
+// `!(a <= b)` is meant: it is true when either side is NaN, which must fail the test.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 /// An affine map `p ↦ A p + b` of 3-space: the first three rows of a row-major 4×4 matrix whose
 /// last row is `0 0 0 1`. Always invertible: the constructors refuse singular matrices.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -168,9 +171,9 @@ impl Affine {
         for corner in 0..8 {
             let p = [0, 1, 2].map(|k| if corner >> k & 1 == 0 { lo[k] } else { hi[k] });
             let q = self.point(p);
-            for k in 0..3 {
-                out.0[k] = out.0[k].min(q[k]);
-                out.1[k] = out.1[k].max(q[k]);
+            for (k, &v) in q.iter().enumerate() {
+                out.0[k] = out.0[k].min(v);
+                out.1[k] = out.1[k].max(v);
             }
         }
         out

@@ -16,6 +16,9 @@
 //! Boxes are f64. Traversal visits children nearest first and skips a subtree whose box starts
 //! beyond the best hit so far.
 
+// `!(a <= b)` is meant: it is true when either side is NaN, which must fail the test.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 /// A box: `lo ≤ hi` on every axis, or empty (`lo = +∞`, `hi = −∞`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Aabb {

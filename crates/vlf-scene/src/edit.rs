@@ -16,6 +16,9 @@
 //! Inserted triangles must lie inside the field's bounding sphere: the field's tiles cover
 //! nothing beyond it. (Place geometry anywhere with instances instead: [`crate::Scene`].)
 
+// `!(a <= b)` is meant: it is true when either side is NaN, which must fail the test.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use crate::affine::Affine;
 use crate::overlay::{Overlay, TooLarge};
 use std::ops::Range;
@@ -98,6 +101,8 @@ pub struct EditedField {
     /// One bit per id (the field's, then the inserted ones): removed.
     removed: Vec<u64>,
     removed_count: u64,
+    /// Of those, the mapped field's own.
+    removed_base: u64,
     overlay: Option<Overlay>,
 }
 
@@ -130,7 +135,7 @@ impl Triangles for Kept<'_> {
 impl EditedField {
     /// The field, unedited.
     pub fn new(field: Arc<Field>) -> EditedField {
-        EditedField { base: field, removed: Vec::new(), removed_count: 0, overlay: None }
+        EditedField { base: field, removed: Vec::new(), removed_count: 0, removed_base: 0, overlay: None }
     }
 
     /// The mapped field.
@@ -186,7 +191,7 @@ impl EditedField {
     pub fn bounds_local(&self) -> ([f64; 3], [f64; 3]) {
         let s = self.base.reader().scene;
         let (mut lo, mut hi) = (s.aabb_min, s.aabb_max);
-        if self.base.triangle_count() as u64 == self.removed_count {
+        if self.base.triangle_count() as u64 == self.removed_base {
             (lo, hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
         }
         if let Some(o) = &self.overlay {
@@ -208,6 +213,7 @@ impl EditedField {
         self.removed[word] |= 1 << (id & 63);
         if !was {
             self.removed_count += 1;
+            self.removed_base += u64::from(id < self.base.triangle_count());
         }
         !was
     }

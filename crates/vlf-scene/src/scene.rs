@@ -258,6 +258,14 @@ impl Scene {
         Some(t.map(|v| i.transform.point(std::array::from_fn(|k| v[k] as f64 + c[k]))))
     }
 
+    /// The world ray `ray` in instance `id`'s field, relative to the field's centre, exactly as
+    /// the queries hand it to the field (mapped in f64, rounded to f32; `t` keeps its meaning),
+    /// or `None` if there is no such instance. With [`EditedField::triangle_local`], a brute
+    /// force over one instance that agrees with the scene bit for bit.
+    pub fn local_ray(&self, id: InstanceId, ray: &Ray) -> Option<Ray> {
+        Some(self.instances.get(id as usize)?.as_ref()?.local_ray(ray, ray.tmax))
+    }
+
     /// The closest hit of `ray` on `[tmin, tmax]` among the instances whose mask shares a bit
     /// with `mask`, or `None` (a miss, or an invalid ray).
     pub fn closest_hit(&self, ray: &Ray, mask: u32) -> Option<SceneHit> {
