@@ -163,8 +163,11 @@ fn world(scene: &Scene) -> World {
     w
 }
 
+/// A field's live triangles relative to its centre, and their ids.
+type Local = (Vec<[[f32; 3]; 3]>, Vec<u32>);
+
 /// Each field's live triangles relative to its centre, with their ids.
-fn locals(scene: &Scene) -> Vec<(Vec<[[f32; 3]; 3]>, Vec<u32>)> {
+fn locals(scene: &Scene) -> Vec<Local> {
     scene
         .fields()
         .iter()
@@ -177,7 +180,7 @@ fn locals(scene: &Scene) -> Vec<(Vec<[[f32; 3]; 3]>, Vec<u32>)> {
 
 /// The exact reference: per admitted instance, the scene's own local ray against every live
 /// triangle of its field with the same kernel.
-fn exact(scene: &Scene, locals: &[(Vec<[[f32; 3]; 3]>, Vec<u32>)], ray: &Ray, mask: u32) -> Option<(Hit, InstanceId)> {
+fn exact(scene: &Scene, locals: &[Local], ray: &Ray, mask: u32) -> Option<(Hit, InstanceId)> {
     let mut best: Option<(Hit, InstanceId)> = None;
     for id in scene.instance_ids() {
         let info = scene.instance(id).unwrap();
@@ -394,7 +397,9 @@ fn rays(scene: &Scene, rng: &mut Rng, per_family: usize) -> Vec<(Ray, u32)> {
             out.push(Ray::new(f32s(o), f32s(sub(target, o))));
         }
     }
-    out.into_iter().map(|ray| (ray, if rng.next_u64() % 5 == 0 { rng.next_u64() as u32 } else { u32::MAX })).collect()
+    out.into_iter()
+        .map(|ray| (ray, if rng.next_u64().is_multiple_of(5) { rng.next_u64() as u32 } else { u32::MAX }))
+        .collect()
 }
 
 /// A small random mesh around the origin (in the inserted object's own space).

@@ -54,6 +54,30 @@ impl Affine {
         a
     }
 
+    /// The rotation by `radians` about the line through `centre` along `axis` (right-handed:
+    /// counter-clockwise seen from the tip of `axis`). `None` if `axis` is zero or a value is
+    /// not finite.
+    pub fn rotation_about(axis: [f64; 3], radians: f64, centre: [f64; 3]) -> Option<Affine> {
+        let len = axis.iter().map(|a| a * a).sum::<f64>().sqrt();
+        if !(len > 0.0 && len.is_finite() && radians.is_finite() && centre.iter().all(|c| c.is_finite())) {
+            return None;
+        }
+        let [x, y, z] = axis.map(|a| a / len);
+        let (s, c) = radians.sin_cos();
+        let t = 1.0 - c;
+        let r = [
+            [t * x * x + c, t * x * y - s * z, t * x * z + s * y],
+            [t * x * y + s * z, t * y * y + c, t * y * z - s * x],
+            [t * x * z - s * y, t * y * z + s * x, t * z * z + c],
+        ];
+        // p ↦ R (p − centre) + centre.
+        let m = std::array::from_fn(|i| {
+            let b = centre[i] - (0..3).map(|k| r[i][k] * centre[k]).sum::<f64>();
+            [r[i][0], r[i][1], r[i][2], b]
+        });
+        Affine::from_3x4(m).ok()
+    }
+
     /// From the 16 numbers of a row-major 4×4 matrix (the scene file's `"transform"`), whose last
     /// row must be `0 0 0 1`.
     ///
@@ -225,6 +249,15 @@ mod tests {
         assert!(matches!(Affine::from_rows(&m), Err(AffineError::Singular { .. })));
         let msg = Affine::from_rows(&[0.0; 16]).unwrap_err().to_string();
         assert!(msg.contains("last row"), "{msg}");
+    }
+
+    #[test]
+    fn a_quarter_turn_about_a_line_moves_points_around_it() {
+        let r = Affine::rotation_about([0.0, 0.0, 2.0], std::f64::consts::FRAC_PI_2, [1.0, 1.0, 0.0]).unwrap();
+        assert!(close(r.point([2.0, 1.0, 5.0]), [1.0, 2.0, 5.0]));
+        assert!(close(r.point([1.0, 1.0, -3.0]), [1.0, 1.0, -3.0]));
+        assert!((r.determinant() - 1.0).abs() < 1e-12);
+        assert!(Affine::rotation_about([0.0; 3], 1.0, [0.0; 3]).is_none());
     }
 
     #[test]

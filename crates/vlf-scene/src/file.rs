@@ -228,7 +228,8 @@ impl SceneFile {
         let mut opened: HashMap<&Path, Arc<Field>> = HashMap::new();
         for (i, spec) in self.instances.iter().enumerate() {
             if !opened.contains_key(spec.field.as_path()) {
-                let f = Field::open(&spec.field).map_err(|e| ctx.fail(i, "field", e.to_string()))?;
+                let f = Field::open(&spec.field)
+                    .map_err(|e| ctx.fail(i, "field", format!("cannot open {}: {e}", spec.field.display())))?;
                 opened.insert(&spec.field, Arc::new(f));
             }
         }

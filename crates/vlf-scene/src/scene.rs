@@ -248,6 +248,14 @@ impl Scene {
         (b.lo, b.hi)
     }
 
+    /// The box around instance `id`'s live triangles in world coordinates, as the hierarchy
+    /// holds it (grown by a relative 2⁻²⁰), or `None` if there is no such instance.
+    pub fn instance_bounds(&self, id: InstanceId) -> Option<([f64; 3], [f64; 3])> {
+        let i = self.instances.get(id as usize)?.as_ref()?;
+        let b = world_box(&self.fields[i.field.0 as usize], &i.transform);
+        Some((b.lo, b.hi))
+    }
+
     /// The vertices of triangle `prim` of instance `instance` in world coordinates, or `None`
     /// if there is no such instance or triangle, or it was removed.
     pub fn world_triangle(&self, instance: InstanceId, prim: u32) -> Option<[[f64; 3]; 3]> {
