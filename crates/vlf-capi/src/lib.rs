@@ -45,11 +45,13 @@
 #![deny(missing_docs)]
 
 mod boundary;
+mod dynamic;
 mod info;
 mod scene;
 mod types;
 
 use boundary::*;
+pub use dynamic::*;
 pub use info::*;
 pub use scene::*;
 use std::ffi::{CStr, c_char, c_void};
@@ -189,13 +191,13 @@ unsafe fn open_path(
 }
 
 #[cfg(unix)]
-fn path_of(bytes: &[u8]) -> Result<&Path, Failure> {
+pub(crate) fn path_of(bytes: &[u8]) -> Result<&Path, Failure> {
     use std::os::unix::ffi::OsStrExt;
     Ok(Path::new(std::ffi::OsStr::from_bytes(bytes)))
 }
 
 #[cfg(not(unix))]
-fn path_of(bytes: &[u8]) -> Result<&Path, Failure> {
+pub(crate) fn path_of(bytes: &[u8]) -> Result<&Path, Failure> {
     std::str::from_utf8(bytes)
         .map(Path::new)
         .map_err(|_| Failure::invalid("argument `path` is not valid UTF-8".to_owned()))
