@@ -1,13 +1,14 @@
 //! The top level: a bounding-volume hierarchy over the instances' world boxes, one instance per
 //! leaf. Its cost depends on the number of instances, never on their triangles.
 //!
-//! - **Build** (at a scene's first query after instances were added in bulk, or when the tree has
+//! - **Build** (`Scene::rebuild`, after instances were added in bulk, and whenever the tree has
 //!   degraded): binned surface-area heuristic, top down, `O(n log n)` for `n` instances; below a
 //!   depth of [`SAH_DEPTH`] the split is the median, so the tree is never deeper than about
 //!   `SAH_DEPTH + log₂ n`.
-//! - **Update** (a transform changed): the leaf's box is replaced and its ancestors refitted,
-//!   `O(depth)`. **Insert** puts a leaf beside the node whose box grows least (a greedy descent,
-//!   `O(depth)`); **remove** splices its parent out, `O(depth)`.
+//! - **Update** (a transform changed): the leaf's box is replaced and its ancestors refitted if it
+//!   stays inside its parent's box, else the leaf is removed and inserted again, `O(depth)`.
+//!   **Insert** puts a leaf beside the node whose box grows least (a greedy descent, `O(depth)`);
+//!   **remove** splices its parent out, `O(depth)`.
 //! - Refits and inserts can make the boxes loose (instances that moved far apart keep a common
 //!   parent). The sum of the inner boxes' surface areas is kept up to date; when it exceeds
 //!   [`REBUILD_FACTOR`] times its value after the last build, or the depth exceeds [`MAX_DEPTH`],
@@ -48,6 +49,11 @@ impl Aabb {
         }
         let e: [f64; 3] = std::array::from_fn(|k| self.hi[k] - self.lo[k]);
         e[0] * e[1] + e[1] * e[2] + e[2] * e[0]
+    }
+
+    /// Whether `o` lies inside this box (an empty `o` always does).
+    pub fn contains(&self, o: &Aabb) -> bool {
+        o.is_empty() || (0..3).all(|k| self.lo[k] <= o.lo[k] && o.hi[k] <= self.hi[k])
     }
 
     fn centroid(&self, k: usize) -> f64 {
@@ -295,14 +301,23 @@ impl Bvh {
         }
     }
 
-    /// Gives leaf `key` the box `b` and refits its ancestors. `O(depth)`.
+    /// Gives leaf `key` the box `b`. `O(depth)`: if `b` stays inside the leaf's parent's box,
+    /// the ancestors are refitted in place; otherwise the leaf is removed and inserted again
+    /// beside the subtree its new box grows least, so that an instance that moved far does not
+    /// stretch the boxes of its old neighbours (which refitting alone would, slowing every ray
+    /// that crosses them until the next rebuild).
     pub fn update(&mut self, key: u32, b: Aabb) {
         let Some(&leaf) = self.leaf_of.get(key as usize).filter(|&&l| l != NONE) else { return };
-        self.nodes[leaf as usize].b = b;
         let parent = self.nodes[leaf as usize].parent;
-        if parent != NONE {
-            self.refit(parent);
+        if parent == NONE || self.nodes[parent as usize].b.contains(&b) {
+            self.nodes[leaf as usize].b = b;
+            if parent != NONE {
+                self.refit(parent);
+            }
+            return;
         }
+        self.remove(key);
+        self.insert(key, b);
     }
 
     /// Recomputes the boxes of `from` and its ancestors, keeping the area sum current.
