@@ -6,7 +6,7 @@
 //! `vlf_scene_closest_hits`) may run on the same scene from any number of threads at once; every
 //! other function changes the scene and must not run concurrently with any other use of it.
 
-use crate::boundary::*;
+use crate::boundary::{self, *};
 use crate::types::VlfStatus::*;
 use crate::types::*;
 use std::ffi::{CStr, c_char};
@@ -99,7 +99,7 @@ fn field_id(scene: &Scene, field: u32) -> Result<FieldId, Failure> {
 pub unsafe extern "C" fn vlf_scene_create(out: *mut *mut VlfScene) -> VlfStatus {
     call("vlf_scene_create", || {
         // SAFETY: the caller's promise.
-        let slot = unsafe { crate::boundary::out(out, "out") }?;
+        let slot = unsafe { boundary::out(out, "out") }?;
         slot.write(Box::into_raw(Box::new(VlfScene { scene: Scene::new() })));
         Ok(())
     })
@@ -140,7 +140,7 @@ pub unsafe extern "C" fn vlf_scene_add_field(scene: *mut VlfScene, path: *const 
         }
         // SAFETY: non-null, NUL-terminated by the caller's promise.
         let bytes = unsafe { CStr::from_ptr(path) }.to_bytes();
-        let f = OpenOptions::new().open(crate::path_of(bytes)?)?;
+        let f = OpenOptions::new().open(path_of(bytes)?)?;
         field.write(scene.add_field(EditedField::new(Arc::new(f))).0);
         Ok(())
     })
