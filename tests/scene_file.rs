@@ -57,6 +57,8 @@ fn a_file_places_shares_and_edits_fields() {
     assert_eq!(scene.fields().len(), 2);
     let (plain, edited) = (&scene.fields()[0], &scene.fields()[1]);
     assert!(!plain.is_edited());
+    // `./room.vlf` is the same file: one mapping.
+    assert!(std::sync::Arc::ptr_eq(plain.field(), edited.field()));
     assert_eq!(edited.inserted_count(), 24);
     let removed =
         edited.ids_of(vlf_scene::Object::Name("lamp")).len() + edited.ids_of(vlf_scene::Object::Name("floor")).len();

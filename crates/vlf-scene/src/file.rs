@@ -225,12 +225,15 @@ impl SceneFile {
     pub fn load(&self, meshes: MeshLoader<'_>) -> Result<Scene, SceneFileError> {
         let dir = self.path.parent().unwrap_or(Path::new(""));
         let ctx = Ctx { path: &self.path, dir };
+        // One mapping per file, however its path is spelled (`a.vlf`, `./a.vlf`, a link).
+        let key = |p: &Path| std::fs::canonicalize(p).unwrap_or_else(|_| p.to_path_buf());
+        let keys: Vec<PathBuf> = self.instances.iter().map(|spec| key(&spec.field)).collect();
         let mut opened: HashMap<&Path, Arc<Field>> = HashMap::new();
         for (i, spec) in self.instances.iter().enumerate() {
-            if !opened.contains_key(spec.field.as_path()) {
+            if !opened.contains_key(keys[i].as_path()) {
                 let f = Field::open(&spec.field)
                     .map_err(|e| ctx.fail(i, "field", format!("cannot open {}: {e}", spec.field.display())))?;
-                opened.insert(&spec.field, Arc::new(f));
+                opened.insert(&keys[i], Arc::new(f));
             }
         }
         let mut read: HashMap<&Path, Vec<[[f64; 3]; 3]>> = HashMap::new();
@@ -245,9 +248,9 @@ impl SceneFile {
         let mut scene = Scene::new();
         let mut shared = HashMap::new();
         for (i, spec) in self.instances.iter().enumerate() {
-            let base = opened[spec.field.as_path()].clone();
+            let base = opened[keys[i].as_path()].clone();
             let id = if spec.remove.is_empty() && spec.insert.is_empty() {
-                *shared.entry(spec.field.as_path()).or_insert_with(|| scene.add_field(EditedField::new(base)))
+                *shared.entry(keys[i].as_path()).or_insert_with(|| scene.add_field(EditedField::new(base)))
             } else {
                 let mut f = EditedField::new(base);
                 for name in &spec.remove {
