@@ -348,20 +348,25 @@ impl Bvh {
             return;
         }
         // The depth is at most MAX_DEPTH + 1 between rebuilds, and each level pushes one node.
-        let mut stack = [(0u32, 0f64); MAX_DEPTH + 4];
-        let mut top = 0;
-        let Some(t) = ray.enter(&self.nodes[self.root as usize].b, tmax()) else { return };
-        stack[0] = (self.root, t);
-        top += 1;
+        // Node ids only: a zeroed `[u32; _]` costs a few vector stores per ray, where pairs with
+        // their entry `t` cost a loop of scalar stores that took half the traversal's time on a
+        // one-instance scene. The entry is computed again when a node is popped (against the
+        // best hit found since, which can only skip more).
+        let mut stack = [0u32; MAX_DEPTH + 4];
+        if ray.enter(&self.nodes[self.root as usize].b, tmax()).is_none() {
+            return;
+        }
+        stack[0] = self.root;
+        let mut top = 1;
         while top > 0 {
             top -= 1;
-            let (at, t_enter) = stack[top];
+            let at = stack[top];
             let limit = tmax();
-            if !(t_enter <= limit) {
+            let n = &self.nodes[at as usize];
+            if at != self.root && ray.enter(&n.b, limit).is_none() {
                 continue;
             }
             counter.cell();
-            let n = &self.nodes[at as usize];
             if n.is_leaf() {
                 if visit(n.left, counter) {
                     return;
@@ -375,7 +380,7 @@ impl Bvh {
                 (a, b) => (a.or(b), a.and(b)),
             };
             // Far first, so that the near child is popped next.
-            for c in [far, near].into_iter().flatten() {
+            for (c, _) in [far, near].into_iter().flatten() {
                 if top < stack.len() {
                     stack[top] = c;
                     top += 1;
