@@ -28,10 +28,6 @@ pub const DEFAULT_MAX_BYTES_PER_TRIANGLE: u64 = 1 << 10;
 /// The smallest budget automatic parameters get, whatever the triangle count, so that a mesh of a
 /// few triangles still bakes (its fixed sections alone exceed a per-triangle allowance).
 pub const MIN_AUTOMATIC_BUDGET: u64 = 4 << 20;
-/// Default target of triangles per BSP leaf.
-pub const DEFAULT_LEAF_SIZE: u32 = 4;
-/// Default largest BSP depth.
-pub const DEFAULT_MAX_DEPTH: u32 = 8;
 /// Automatic refinement stops once the mean number of triangles in a non-empty tile falls to this.
 pub const SPARSE_TILE_LOAD: f64 = 3.0;
 /// Directions baked to estimate a rung's size.
@@ -45,20 +41,7 @@ const SAMPLE_DIRECTIONS: usize = 8;
 /// 9 directions first, then adds directions, and ends where the sweep stopped finding speed.
 pub const LADDER: [(u32, u32); 5] = [(2, 16), (2, 32), (2, 64), (3, 64), (4, 64)];
 
-/// How a tile's z range is cut into leaves (`formats/vlf.md` §6.3, [`crate::leaves`]): a leaf of
-/// at most `leaf_size` refs is not split, and splits go at most `max_depth` deep (a tile has at
-/// most `2^max_depth` leaves). `max_depth = 0` gives the paper's "linear tiles", one leaf each.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
-pub struct DepthPolicy {
-    pub leaf_size: u32,
-    pub max_depth: u32,
-}
-
-impl Default for DepthPolicy {
-    fn default() -> Self {
-        DepthPolicy { leaf_size: DEFAULT_LEAF_SIZE, max_depth: DEFAULT_MAX_DEPTH }
-    }
-}
+pub use vlf_raster::{DEFAULT_LEAF_SIZE, DEFAULT_MAX_DEPTH, DepthPolicy};
 
 /// What the user asks for. `None` means "choose for me".
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -133,6 +116,13 @@ pub struct Params {
     pub depth: DepthPolicy,
     /// The conservative margin μ in world units.
     pub margin: f64,
+}
+
+impl Params {
+    /// The tile grid of a field of these parameters around a sphere of `radius`.
+    pub fn grid(&self, radius: f64) -> vlf_raster::Grid {
+        vlf_raster::Grid { tiles: self.tiles, radius, margin: self.margin, depth: self.depth }
+    }
 }
 
 /// The chosen parameters and why.

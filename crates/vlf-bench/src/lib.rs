@@ -15,12 +15,16 @@
 //! - [`peers`]: the field against Embree, obvhs and the kd-tree on the same scenes and rays
 //!   (issue 12), every contestant's hits checked against the brute force.
 //!
+//! - [`dynamic`]: dynamic scenes (issue 13): instances against Embree's two-level instancing,
+//!   per-frame transform updates, and the paper's delete and reinsert.
+//!
 //! Frames are traced on one thread (the paper used one processor); every timing is the median of
 //! `repeats` runs after a warm-up run. Bakes use all cores.
 
 // Only `first_pixel` needs `unsafe`: it maps fields and asks the kernel which pages are cached.
 #![deny(unsafe_code)]
 
+pub mod dynamic;
 pub mod experiments;
 #[allow(unsafe_code)]
 pub mod first_pixel;

@@ -105,6 +105,10 @@ enum Command {
     /// to --out; `docs/benchmarks/peers.sh` installs what it needs and runs it. Exits nonzero if
     /// the field disagrees with the brute force.
     Peers(PeersArgs),
+    /// Dynamic scenes (issue 13): instances of a field against Embree's two-level instancing,
+    /// transform updates per frame against its top-level rebuild, and the paper's delete and
+    /// reinsert; writes dynamic.md to --out.
+    Dynamic(DynamicArgs),
     /// Everything, at the defaults above.
     All,
 }
@@ -157,6 +161,37 @@ struct PeersArgs {
     /// Run nothing: rewrite peers.md and the plots in --out from the peers.json of an earlier run.
     #[arg(long, value_name = "PEERS_JSON")]
     from_json: Option<PathBuf>,
+}
+
+#[derive(Args)]
+struct DynamicArgs {
+    /// Instances of the instanced field.
+    #[arg(long, default_value_t = 1000)]
+    instances: u32,
+    /// Triangles of the instanced field.
+    #[arg(long, default_value_t = 10_000)]
+    mesh_triangles: usize,
+    /// Incoherent rays per measurement.
+    #[arg(long, default_value_t = 262_144)]
+    incoherent: usize,
+    /// Instances moved per frame.
+    #[arg(long, default_value_t = 100)]
+    updates: u32,
+    /// Frames of updates.
+    #[arg(long, default_value_t = 50)]
+    frames: usize,
+    /// Triangles of the edited field.
+    #[arg(long, default_value_t = 100_000)]
+    big_triangles: usize,
+    /// Triangles of each object moved in it.
+    #[arg(long, value_delimiter = ',', default_values_t = [1_000usize, 10_000])]
+    objects: Vec<usize>,
+    /// Moves of each object.
+    #[arg(long, default_value_t = 10)]
+    moves: usize,
+    /// Directions and tiles of the edited field, DIRECTIONSxTILES.
+    #[arg(long, default_value = "129x64", value_parser = parse_setting)]
+    big_params: (u32, u32),
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
@@ -243,6 +278,32 @@ fn main() -> Result<()> {
     if let Command::Peers(a) = cli.command {
         return peers(a, &c);
     }
+    if let Command::Dynamic(a) = cli.command {
+        let config = vlf_bench::dynamic::DynamicConfig {
+            work: c.work.clone().unwrap_or_else(|| "target/bench-work".into()),
+            repeats: c.repeats.unwrap_or(5),
+            instances: a.instances,
+            mesh_triangles: a.mesh_triangles,
+            resolution: c.resolution,
+            incoherent: a.incoherent,
+            updates: a.updates,
+            frames: a.frames,
+            big_triangles: a.big_triangles,
+            objects: a.objects,
+            moves: a.moves,
+            big_params: a.big_params,
+            command: std::iter::once("vlf-bench".to_string())
+                .chain(std::env::args().skip(1))
+                .collect::<Vec<_>>()
+                .join(" "),
+            verbose: !c.quiet,
+        };
+        let md = vlf_bench::dynamic::run(&config)?;
+        std::fs::create_dir_all(&c.out)?;
+        std::fs::write(c.out.join("dynamic.md"), &md)?;
+        print!("{md}");
+        return Ok(());
+    }
     let s = Settings {
         work: c.work.unwrap_or_else(|| "target/bench-work".into()),
         out: c.out,
@@ -265,7 +326,7 @@ fn main() -> Result<()> {
             print!("{}", vlf_bench::first_pixel::table(&series));
         }
         Command::FirstPixelChild { field, access } => vlf_bench::first_pixel::child(&field, access)?,
-        Command::Peers(_) => unreachable!("handled above"),
+        Command::Peers(_) | Command::Dynamic(_) => unreachable!("handled above"),
         Command::All => {
             println!("{}", vlf_bench::experiments::figure3(&s, &[1_000, 4_000, 16_000, 64_000, 256_000, 1_000_000])?);
             println!("{}", vlf_bench::experiments::figure4(&s, 16_000, 120)?);

@@ -15,6 +15,11 @@
 #include <stdint.h>
 
 /**
+ * The instance id of a miss (`0xFFFFFFFF`), in `vlf_scene_closest_hit`'s `instance`.
+ */
+#define VLF_NO_INSTANCE UINT32_MAX
+
+/**
  * The triangle id of a miss (`0xFFFFFFFF`), as in a hits file.
  */
 #define VLF_NO_PRIM UINT32_MAX
@@ -127,6 +132,12 @@ typedef int32_t VlfStatus;
  * `vlf_close`. Immutable, so it may be queried from many threads at once.
  */
 typedef struct VlfField VlfField;
+
+/**
+ * A scene of instances. Opaque: create it with `vlf_scene_create`, release it with
+ * `vlf_scene_destroy`.
+ */
+typedef struct VlfScene VlfScene;
 
 /**
  * How to open a field (`vlf_open_path_ex`, `vlf_open_memory_ex`). A NULL options pointer means
@@ -761,6 +772,214 @@ VlfStatus vlf_input_hash(const struct VlfField *field, uint8_t *hash);
  * writable.
  */
 VlfStatus vlf_bounding_sphere(const struct VlfField *field, double *center, double *radius);
+
+/**
+ * Creates an empty scene in `*out`.
+ *
+ * Returns `VLF_OK`, `VLF_ERR_NULL_ARGUMENT` or `VLF_ERR_INVALID_ARGUMENT` (a misaligned `out`).
+ *
+ * # Safety
+ * `out` must be NULL or valid for writing a pointer.
+ */
+VlfStatus vlf_scene_create(struct VlfScene **out);
+
+/**
+ * Destroys a scene: its edits, its instances, and the mappings of its fields. NULL is ignored.
+ *
+ * # Safety
+ * `scene` must be NULL or a handle from `vlf_scene_create` not yet destroyed, not in use by
+ * another call.
+ */
+void vlf_scene_destroy(struct VlfScene *scene);
+
+/**
+ * Opens (maps) the field file at `path` into the scene and writes its id to `*field` (0, 1, …
+ * in the order fields are added). Every instance of the field shares the one mapping; add a file
+ * once and place it as often as needed.
+ *
+ * Returns `VLF_OK`, or what `vlf_open_path` returns for the file.
+ *
+ * # Safety
+ * `scene` must be NULL or a live handle used by no other call; `path` NULL or NUL-terminated;
+ * `field` NULL or writable.
+ */
+VlfStatus vlf_scene_add_field(struct VlfScene *scene, const char *path, uint32_t *field);
+
+/**
+ * Places field `field` in the world with `transform` (16 doubles, a row-major 4×4 affine matrix
+ * mapping the field's space to the world, last row `0 0 0 1`; NULL for the identity) and
+ * `mask`, and writes the new instance's id to `*instance` (0, 1, … never reused). Costs
+ * `O(log n)` for `n` instances, nothing proportional to the field's triangles.
+ *
+ * Returns `VLF_OK`; `VLF_ERR_INVALID_ARGUMENT` for a field id the scene lacks or a transform that
+ * is not finite, not affine or singular (the message says which); `VLF_ERR_NULL_ARGUMENT`.
+ *
+ * # Safety
+ * `scene` must be NULL or a live handle used by no other call; `transform` NULL or 16 doubles;
+ * `instance` NULL or writable.
+ */
+VlfStatus vlf_scene_add_instance(struct VlfScene *scene,
+                                 uint32_t field,
+                                 const double *transform,
+                                 uint32_t mask,
+                                 uint32_t *instance);
+
+/**
+ * Moves instance `instance`: `transform` (as in `vlf_scene_add_instance`) replaces its
+ * transform. Refits the top-level hierarchy along the instance's path: nothing proportional to
+ * its triangles.
+ *
+ * Returns `VLF_OK`; `VLF_ERR_INVALID_ARGUMENT` for an instance the scene lacks or an unusable
+ * transform; `VLF_ERR_NULL_ARGUMENT`.
+ *
+ * # Safety
+ * `scene` must be NULL or a live handle used by no other call; `transform` NULL or 16 doubles.
+ */
+VlfStatus vlf_scene_set_transform(struct VlfScene *scene,
+                                  uint32_t instance,
+                                  const double *transform);
+
+/**
+ * Sets instance `instance`'s mask: a query sees it only if their masks share a bit.
+ *
+ * Returns `VLF_OK`, `VLF_ERR_INVALID_ARGUMENT` (no such instance) or `VLF_ERR_NULL_ARGUMENT`.
+ *
+ * # Safety
+ * `scene` must be NULL or a live handle used by no other call.
+ */
+VlfStatus vlf_scene_set_mask(struct VlfScene *scene, uint32_t instance, uint32_t mask);
+
+/**
+ * Removes instance `instance` from the scene (its id is not reused).
+ *
+ * Returns `VLF_OK`, `VLF_ERR_INVALID_ARGUMENT` (no such instance) or `VLF_ERR_NULL_ARGUMENT`.
+ *
+ * # Safety
+ * `scene` must be NULL or a live handle used by no other call.
+ */
+VlfStatus vlf_scene_remove_instance(struct VlfScene *scene, uint32_t instance);
+
+/**
+ * Removes the `n` triangles `ids` from field `field` (every instance of it loses them), in
+ * memory: the file is not written. Ids already removed are skipped; `*removed` (if not NULL)
+ * receives how many were removed now.
+ *
+ * Returns `VLF_OK`; `VLF_ERR_INVALID_ARGUMENT` for a field the scene lacks or an id out of range
+ * (then nothing is removed); `VLF_ERR_NULL_ARGUMENT` (`ids` may be NULL when `n` is 0).
+ *
+ * # Safety
+ * `scene` must be NULL or a live handle used by no other call; `ids` must point to `n` ids;
+ * `removed` NULL or writable.
+ */
+VlfStatus vlf_scene_remove_triangles(struct VlfScene *scene,
+                                     uint32_t field,
+                                     const uint32_t *ids,
+                                     size_t n,
+                                     uint64_t *removed);
+
+/**
+ * Removes from field `field` every triangle whose provenance name is `name` (a NUL-terminated
+ * UTF-8 OBJ object or group name, or glTF mesh name), in memory. `*removed` (if not NULL)
+ * receives how many were removed now.
+ *
+ * Returns `VLF_OK`; `VLF_ERR_INVALID_ARGUMENT` if no triangle comes from `name` (the message
+ * lists some of the field's names) or the field is not the scene's; `VLF_ERR_NULL_ARGUMENT`.
+ *
+ * # Safety
+ * `scene` must be NULL or a live handle used by no other call; `name` NULL or NUL-terminated;
+ * `removed` NULL or writable.
+ */
+VlfStatus vlf_scene_remove_object(struct VlfScene *scene,
+                                  uint32_t field,
+                                  const char *name,
+                                  uint64_t *removed);
+
+/**
+ * Inserts `n` triangles into field `field`, in memory: `vertices` holds 9 doubles per triangle
+ * (`v0.x, v0.y, v0.z, v1.x, …, v2.z`) in the mesh's own space, placed in the field's space by
+ * `transform` (16 doubles as in `vlf_scene_add_instance`; NULL for the identity), then
+ * rasterised into the field's directions, tiles and leaves with the bake's kernel. Every
+ * instance of the field shows them. `*first` receives the id of the first (the others follow in
+ * order): ids after every id in use.
+ *
+ * Returns `VLF_OK`; `VLF_ERR_INVALID_ARGUMENT` for a field the scene lacks, an unusable
+ * transform, a vertex that is not finite or a triangle outside the field's bounding sphere
+ * (then nothing is inserted); `VLF_ERR_LIMIT` past 2³² − 1 triangles; `VLF_ERR_NULL_ARGUMENT`.
+ *
+ * # Safety
+ * `scene` must be NULL or a live handle used by no other call; `vertices` must point to `9·n`
+ * doubles; `transform` NULL or 16 doubles; `first` NULL or writable.
+ */
+VlfStatus vlf_scene_insert_triangles(struct VlfScene *scene,
+                                     uint32_t field,
+                                     const double *vertices,
+                                     size_t n,
+                                     const double *transform,
+                                     uint32_t *first);
+
+/**
+ * Traces `ray` through the instances whose mask shares a bit with `mask`: writes its closest
+ * hit on `[tmin, tmax]` to `*hit` (`prim` the triangle's id in the hit instance's field,
+ * inserted triangles after the field's own; `t` in units of the world ray) and the instance to
+ * `*instance` (`VLF_NO_INSTANCE` and the miss record if nothing is hit). The same answer, bit for
+ * bit, as the Rust `Scene::closest_hit`. Allocates nothing.
+ *
+ * Returns `VLF_OK` (hit or miss), `VLF_ERR_NULL_ARGUMENT` or `VLF_ERR_INVALID_ARGUMENT`
+ * (misaligned or overlapping pointers).
+ *
+ * # Safety
+ * `scene` must be NULL or a live handle; `ray` NULL or a valid ray; `hit` and `instance` NULL or
+ * writable.
+ */
+VlfStatus vlf_scene_closest_hit(const struct VlfScene *scene,
+                                const struct VlfRay *ray,
+                                uint32_t mask,
+                                struct VlfHit *hit,
+                                uint32_t *instance);
+
+/**
+ * Traces `ray` for any hit on `[tmin, tmax]` among the instances whose mask shares a bit with
+ * `mask`: writes 1 to `*hit` if something is hit, 0 if not.
+ *
+ * Returns `VLF_OK` (hit or miss), `VLF_ERR_NULL_ARGUMENT` or `VLF_ERR_INVALID_ARGUMENT`.
+ *
+ * # Safety
+ * `scene` must be NULL or a live handle; `ray` NULL or a valid ray; `hit` NULL or writable.
+ */
+VlfStatus vlf_scene_any_hit(const struct VlfScene *scene,
+                            const struct VlfRay *ray,
+                            uint32_t mask,
+                            uint8_t *hit);
+
+/**
+ * Traces `n` rays as `vlf_scene_closest_hit` would: `hits[i]` and `instances[i]` receive the
+ * answer for `rays[i]`. Runs on the calling thread; call it from several threads on disjoint
+ * parts of the arrays to use several cores. `rays`, `hits` and `instances` may be NULL when `n`
+ * is 0, and must not overlap.
+ *
+ * Returns `VLF_OK`, `VLF_ERR_NULL_ARGUMENT`, or `VLF_ERR_INVALID_ARGUMENT` (misaligned or
+ * overlapping arrays, or `n` too large); on an error nothing is written.
+ *
+ * # Safety
+ * `scene` must be NULL or a live handle; `rays` must point to `n` rays, `hits` to room for `n`
+ * hits and `instances` to room for `n` ids (or be NULL when `n` is 0).
+ */
+VlfStatus vlf_scene_closest_hits(const struct VlfScene *scene,
+                                 const struct VlfRay *rays,
+                                 size_t n,
+                                 uint32_t mask,
+                                 struct VlfHit *hits,
+                                 uint32_t *instances);
+
+/**
+ * The number of instances in the scene (added and not removed), in `*count`.
+ *
+ * Returns `VLF_OK`, `VLF_ERR_NULL_ARGUMENT` or `VLF_ERR_INVALID_ARGUMENT`.
+ *
+ * # Safety
+ * `scene` must be NULL or a live handle; `count` NULL or writable.
+ */
+VlfStatus vlf_scene_instance_count(const struct VlfScene *scene, uint32_t *count);
 
 /**
  * The field's format version (`formats/vlf.md` §3.4) in `*major` and `*minor`: 1.0 holds

@@ -204,3 +204,18 @@ pub(crate) fn triangle_range(field: &Field, prim: u32) -> Result<(), Failure> {
     }
     Ok(())
 }
+
+/// The path named by the NUL-terminated `bytes` of a `path` argument (the platform's encoding).
+#[cfg(unix)]
+pub(crate) fn path_of(bytes: &[u8]) -> Result<&std::path::Path, Failure> {
+    use std::os::unix::ffi::OsStrExt;
+    Ok(std::path::Path::new(std::ffi::OsStr::from_bytes(bytes)))
+}
+
+/// The path named by the NUL-terminated `bytes` of a `path` argument (UTF-8 off Unix).
+#[cfg(not(unix))]
+pub(crate) fn path_of(bytes: &[u8]) -> Result<&std::path::Path, Failure> {
+    std::str::from_utf8(bytes)
+        .map(std::path::Path::new)
+        .map_err(|_| Failure::invalid("argument `path` is not valid UTF-8".to_owned()))
+}

@@ -45,16 +45,17 @@
 #![deny(missing_docs)]
 
 mod boundary;
+mod dynamic;
 mod info;
 mod scene;
 mod types;
 
 use boundary::*;
+pub use dynamic::*;
 pub use info::*;
 pub use scene::*;
 use std::ffi::{CStr, c_char, c_void};
 use std::panic::{AssertUnwindSafe, catch_unwind};
-use std::path::Path;
 use types::VlfStatus::*;
 pub use types::*;
 use vlf_runtime::{Hit, OpenOptions};
@@ -186,19 +187,6 @@ unsafe fn open_path(
         out.write(Box::into_raw(Box::new(VlfField { field })));
         Ok(())
     })
-}
-
-#[cfg(unix)]
-fn path_of(bytes: &[u8]) -> Result<&Path, Failure> {
-    use std::os::unix::ffi::OsStrExt;
-    Ok(Path::new(std::ffi::OsStr::from_bytes(bytes)))
-}
-
-#[cfg(not(unix))]
-fn path_of(bytes: &[u8]) -> Result<&Path, Failure> {
-    std::str::from_utf8(bytes)
-        .map(Path::new)
-        .map_err(|_| Failure::invalid("argument `path` is not valid UTF-8".to_owned()))
 }
 
 /// Opens a field from `len` bytes at `data` and stores the new handle in `*out`.

@@ -304,3 +304,92 @@ fn header_compiles_as_cpp() {
         assert!(out.status.success(), "{cmd:?} failed:\n{}", text(&out.stderr));
     }
 }
+
+/// `tests/c/scene_test.c`'s records for `rays` in `scene`: per ray the closest hit over every
+/// instance (16 bytes), its instance (4 bytes) and the any-hit byte under `any_mask`.
+fn scene_records(scene: &vlf_scene::Scene, rays: &[Ray], any_mask: u32) -> Vec<u8> {
+    let mut out = Vec::with_capacity(rays.len() * 21);
+    for ray in rays {
+        let h = scene.closest_hit(ray, u32::MAX);
+        out.extend_from_slice(bytemuck::bytes_of(&Hit::record(h.map(|h| h.hit))));
+        out.extend_from_slice(&h.map_or(u32::MAX, |h| h.instance).to_le_bytes());
+        out.push(scene.any_hit(ray, any_mask) as u8);
+    }
+    out
+}
+
+#[test]
+fn c_scene_api_agrees_with_the_rust_api() {
+    use vlf_scene::{Affine, EditedField, Scene};
+    let lib = library_dir();
+    let work = tempfile::tempdir_in(env!("CARGO_TARGET_TMPDIR")).expect("temp dir");
+    let w = work.path();
+    let field_path = bake_bunny(w);
+    let field = std::sync::Arc::new(Field::open(&field_path).expect("open"));
+    let (c, r) = field.bounding_sphere();
+    let count = field.triangle_count();
+    // The field's rays, and as many around the mirrored instance (x ↦ -2x + 3r, z ↦ z/2).
+    let mut rays = ray_mix(&field);
+    let m = [-2.0 * c[0] + 3.0 * r, c[1], 0.5 * c[2]];
+    let mut rng = Rng::new(13);
+    for _ in 0..4_000 {
+        let o: [f64; 3] = std::array::from_fn(|k| m[k] + 3.0 * r * rng.range(-1.0, 1.0));
+        let t: [f64; 3] = std::array::from_fn(|k| m[k] + 0.8 * r * rng.range(-1.0, 1.0));
+        rays.push(Ray::new(to_f32(o), to_f32(std::array::from_fn(|k| t[k] - o[k]))));
+    }
+    let rays_path = w.join("rays.bin");
+    std::fs::write(&rays_path, bytemuck::cast_slice::<Ray, u8>(&rays)).expect("write rays");
+
+    let exe = w.join("scene_test");
+    let archive = lib.join("libvlf.a");
+    let mut args = vec![archive.to_str().expect("UTF-8 path")];
+    args.extend(STATIC_LIBS);
+    compile("c11", &[&crate_dir().join("tests/c/scene_test.c")], &args, &exe);
+    let (before, after) = (w.join("before.bin"), w.join("after.bin"));
+    let out = run(Command::new(&exe).arg(&field_path).arg(&rays_path).arg(&before).arg(&after));
+    let stdout = text(&out.stdout);
+    assert!(stdout.contains(" passed, 0 failed"), "{stdout}{}", text(&out.stderr));
+
+    // The same scene and the same edits through the Rust API.
+    let rows = |v: [f64; 12]| {
+        Affine::from_rows(&[
+            v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7], v[8], v[9], v[10], v[11], 0.0, 0.0, 0.0, 1.0,
+        ])
+        .unwrap()
+    };
+    let mut scene = Scene::new();
+    let id = scene.add_field(EditedField::new(field.clone()));
+    let a = scene.add_instance(id, Affine::IDENTITY, 1).unwrap();
+    let b = scene.add_instance(id, rows([-2.0, 0.0, 0.0, 3.0 * r, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.5, 0.0]), 2).unwrap();
+    let want_before = scene_records(&scene, &rays, 2);
+    scene.set_transform(a, rows([1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.5 * r, 0.0, 0.0, 1.0, 0.0])).unwrap();
+    scene.set_mask(b, 3).unwrap();
+    scene.edit(id, |f| f.remove(&[0, 1, 1])).unwrap().unwrap();
+    let t0 = [c, [c[0] + 0.5 * r, c[1], c[2]], [c[0], c[1] + 0.5 * r, c[2]]];
+    let t1 = [
+        [c[0], c[1], c[2] + 0.25 * r],
+        [c[0] + 0.25 * r, c[1], c[2] + 0.25 * r],
+        [c[0], c[1] + 0.25 * r, c[2] + 0.5 * r],
+    ];
+    scene.edit(id, |f| f.insert(&[t0], &Affine::IDENTITY)).unwrap().unwrap();
+    scene.edit(id, |f| f.insert(&[t1], &Affine::translation([0.0, 0.25 * r, 0.0]))).unwrap().unwrap();
+    let want_after = scene_records(&scene, &rays, 1);
+
+    for (label, path, want) in [("before the edits", &before, &want_before), ("after the edits", &after, &want_after)] {
+        let got = std::fs::read(path).expect("read records");
+        assert_eq!(got.len(), want.len(), "{label}: one record per ray");
+        let differ = got.chunks_exact(21).zip(want.chunks_exact(21)).filter(|(g, w)| g != w).count();
+        assert_eq!(differ, 0, "{label}: {differ} of {} rays differ between C and Rust", rays.len());
+        // Both instances are hit, and after the edits the inserted triangles too.
+        let instance_of = |rec: &[u8]| u32::from_le_bytes(rec[16..20].try_into().unwrap());
+        let prim_of = |rec: &[u8]| u32::from_le_bytes(rec[4..8].try_into().unwrap());
+        let on = |k: u32| want.chunks_exact(21).filter(|rec| instance_of(rec) == k).count();
+        assert!(on(0) > 500 && on(1) > 500, "{label}: {} and {} hits on the two instances", on(0), on(1));
+        if path == &after {
+            let inserted =
+                want.chunks_exact(21).filter(|rec| prim_of(rec) >= count && prim_of(rec) != u32::MAX).count();
+            assert!(inserted > 20, "{label}: {inserted} hits on inserted triangles");
+        }
+        println!("{label}: {} rays, C and Rust identical", rays.len());
+    }
+}

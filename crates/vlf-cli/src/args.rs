@@ -233,8 +233,17 @@ pub struct UnpackArgs {
 
 #[derive(Args)]
 pub struct TraceArgs {
-    /// The field file.
-    pub field: PathBuf,
+    /// The field file (or --scene).
+    #[arg(required_unless_present = "scene", conflicts_with = "scene")]
+    pub field: Option<PathBuf>,
+    /// Trace against a scene file instead (formats/scene.md): fields placed by transforms, with
+    /// edits. A hit's prim is the triangle's id in the hit instance's field.
+    #[arg(long, value_name = "SCENE.json")]
+    pub scene: Option<PathBuf>,
+    /// With --scene: also write the hit instance of every ray, a little-endian u32 each
+    /// (0xFFFFFFFF on a miss), in ray order.
+    #[arg(long, value_name = "FILE", requires = "scene")]
+    pub instance_ids: Option<PathBuf>,
     /// Rays: 32-byte little-endian records (formats/rays.md).
     #[arg(long, value_name = "FILE")]
     pub rays: PathBuf,
@@ -303,8 +312,33 @@ pub enum WorkArg {
 
 #[derive(Args)]
 pub struct RenderArgs {
-    /// The field file.
-    pub field: PathBuf,
+    /// The field file (or --scene).
+    #[arg(required_unless_present = "scene", conflicts_with = "scene")]
+    pub field: Option<PathBuf>,
+    /// Render a scene file instead (formats/scene.md): fields placed by transforms, with edits.
+    #[arg(long, value_name = "SCENE.json")]
+    pub scene: Option<PathBuf>,
+    /// With --scene: render N frames (1 to 10000) into one animated PNG, the --move instances
+    /// travelling along --path and turning by --spin from the first frame to the last.
+    #[arg(long, value_name = "N", requires = "scene", value_parser = between(1u32, 10_000), allow_negative_numbers = true)]
+    pub frames: Option<u32>,
+    /// With --frames: an instance to move (its index in the scene file), repeatable (default:
+    /// the last instance).
+    #[arg(long = "move", value_name = "ID", requires = "frames", value_parser = between(0u32, u32::MAX - 1),
+          allow_negative_numbers = true)]
+    pub moves: Vec<u32>,
+    /// With --frames: how far the moved instances travel by the last frame, DX,DY,DZ in world
+    /// units (default: half the scene's width along x).
+    #[arg(long, value_name = "DX,DY,DZ", value_parser = parse_vec3, allow_hyphen_values = true, requires = "frames")]
+    pub path: Option<[f64; 3]>,
+    /// With --frames: how far the moved instances turn by the last frame, in degrees about the
+    /// --up axis through the centre of each (-36000 to 36000).
+    #[arg(long, value_name = "DEGREES", default_value_t = 0.0, value_parser = real(-36000.0, 36000.0, (false, false)),
+          allow_negative_numbers = true)]
+    pub spin: f64,
+    /// With --frames: how long each frame shows, in milliseconds (1 to 60000).
+    #[arg(long, value_name = "MS", default_value_t = 40, value_parser = between(1u16, 60_000), allow_negative_numbers = true)]
+    pub frame_ms: u16,
     /// The PNG to write (the name must end in .png).
     #[arg(short, long, value_name = "IMAGE.png", value_parser = parse_png_path)]
     pub output: PathBuf,
@@ -444,6 +478,11 @@ mod tests {
             &["pack", "f.vlf", "-o", "p.vlf"],
             &["unpack", "p.vlf", "-o", "f.vlf"],
             &["trace", "f.vlf", "--rays", "r.bin", "-o", "h.bin"],
+            &["trace", "--scene", "s.json", "--rays", "r.bin", "-o", "h.bin", "--instance-ids", "i.bin"],
+            &[
+                "render", "--scene", "s.json", "-o", "p.png", "--frames", "3", "--move", "1", "--path", "1,0,0",
+                "--spin", "90",
+            ],
             &["rays", "f.vlf", "-o", "r.bin"],
             &["render", "f.vlf", "-o", "p.png", "--work-image", "w.png", "--work-max", "9", "--camera", "0"],
             &["gen", "grid", "-o", "g.obj"],

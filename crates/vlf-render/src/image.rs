@@ -140,6 +140,27 @@ pub fn encode_png(width: u32, height: u32, rgb: &[u8]) -> Result<Vec<u8>, png::E
     Ok(bytes)
 }
 
+/// An animated PNG (APNG) of `frames`, each 8-bit RGB of `width × height`, shown `delay_ms`
+/// milliseconds each and looped forever. Viewers without APNG support show the first frame.
+pub fn encode_apng(width: u32, height: u32, frames: &[Vec<u8>], delay_ms: u16) -> Result<Vec<u8>, png::EncodingError> {
+    let mut bytes = Vec::new();
+    {
+        let mut encoder = png::Encoder::new(&mut bytes, width, height);
+        encoder.set_color(png::ColorType::Rgb);
+        encoder.set_depth(png::BitDepth::Eight);
+        encoder.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
+        encoder.set_compression(png::Compression::High);
+        encoder.set_animated(frames.len().max(1) as u32, 0)?;
+        encoder.set_frame_delay(delay_ms, 1000)?;
+        let mut writer = encoder.write_header()?;
+        for rgb in frames {
+            writer.write_image_data(rgb)?;
+        }
+        writer.finish()?;
+    }
+    Ok(bytes)
+}
+
 /// Width, height and 8-bit RGB pixels of a PNG (any colour type; alpha is dropped, grey expanded).
 pub fn decode_png(bytes: &[u8]) -> Result<(u32, u32, Vec<u8>), png::DecodingError> {
     let mut decoder = png::Decoder::new(std::io::Cursor::new(bytes));

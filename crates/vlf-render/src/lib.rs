@@ -3,6 +3,7 @@
 //!
 //! - [`Scene`]: a field's triangles, smoothed shading normals and surfaces ([`Surface`], from the
 //!   materials the field carries, `formats/vlf.md` §5.10, else a default);
+//!   [`Scene::from_instances`] shades a dynamic scene of `vlf_scene` instances;
 //! - [`View`]: a pinhole or orthographic camera: framing the scene from outside or inside (the
 //!   paper's viewpoints), placed by hand, or a glTF camera from the field;
 //! - [`Light`]: point, spot and directional lights: the field's glTF lights, or
@@ -36,6 +37,7 @@
 
 mod framing;
 mod image;
+mod instances;
 mod light;
 mod math;
 mod render;
@@ -43,7 +45,9 @@ mod scene;
 pub mod setup;
 mod view;
 
-pub use image::{WorkImage, WorkMetric, decode_png, encode_png, inferno, picture_bytes_at_most, to_srgb8, work_image};
+pub use image::{
+    WorkImage, WorkMetric, decode_png, encode_apng, encode_png, inferno, picture_bytes_at_most, to_srgb8, work_image,
+};
 pub use light::{Emitter, Light, default_lights};
 pub use math::V3;
 pub use render::{Background, Frame, MAX_BOUNCES, RayCounts, Settings, render};

@@ -605,6 +605,15 @@ impl<'a> FieldView<'a> {
     pub fn from_bytes(bytes: &'a [u8]) -> Result<FieldView<'a>, FormatError> {
         FieldReader::new(bytes).map(FieldView::new)
     }
+
+    /// A query engine over sections a caller assembled: `FieldReader`'s fields may borrow from
+    /// different places, say a mapped field's directions, rotations and lookup with tiles,
+    /// leaves and triangles built in memory (`vlf-scene` inserts triangles into a field this
+    /// way). The queries read only the sections, bounds-checked as always: sections that do not
+    /// agree with each other give wrong answers, never a panic or an out-of-bounds read.
+    pub fn from_reader(reader: FieldReader<'a>) -> FieldView<'a> {
+        FieldView::new(reader)
+    }
 }
 
 impl Field {

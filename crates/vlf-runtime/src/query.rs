@@ -337,6 +337,37 @@ impl<'a> FieldView<'a> {
         found
     }
 
+    /// [`Self::closest_hit_local`] with the triangles read through `tris` instead of the field's
+    /// TRIANGLES, counting the work: an id whose `tris.vertices(id)` is `None` is skipped, as the
+    /// kernel skips ids a damaged file names. For callers that hide some of a field's triangles
+    /// without writing its bytes (`vlf-scene`'s edits). The walk is [`Self::closest_hit`]'s.
+    pub fn closest_hit_local_in(&self, ray: &Ray, tris: &impl Triangles, counter: &mut impl Counter) -> Option<Hit> {
+        let setup = self.setup(ray, [0.0; 3])?;
+        counter.ray();
+        let tri_ray = TriRay::relative(ray, [0.0; 3]);
+        let mut best = Closest::new(ray.tmax);
+        self.walk(&setup, counter, |leaf, counter| {
+            let t_far = lower(leaf.exit_t, best.tmax as f64);
+            tri_ray.closest_in(tris, leaf.passing(t_far), &mut best, counter);
+            if best.hit.is_some() && (best.tmax as f64) <= leaf.exit_t { Visit::Done } else { Visit::Continue }
+        });
+        best.hit
+    }
+
+    /// [`Self::any_hit_local`] with the triangles read through `tris`, as
+    /// [`Self::closest_hit_local_in`]; the first hit found, counting the work.
+    pub fn any_hit_local_in(&self, ray: &Ray, tris: &impl Triangles, counter: &mut impl Counter) -> Option<Hit> {
+        let setup = self.setup(ray, [0.0; 3])?;
+        counter.ray();
+        let tri_ray = TriRay::relative(ray, [0.0; 3]);
+        let mut found = None;
+        self.walk(&setup, counter, |leaf, counter| {
+            found = tri_ray.any_in(tris, leaf.passing(leaf.exit_t), ray.tmax, counter);
+            if found.is_some() { Visit::Done } else { Visit::Continue }
+        });
+        found
+    }
+
     /// The ray's candidate set (the paper's potentially visible set), leaf by leaf in ray order:
     /// calls `visit(ids, exit_t)` with the triangle ids of each visited leaf (before the box test)
     /// and the ray parameter at which the ray leaves that leaf, until `visit` returns `true`. A

@@ -56,7 +56,9 @@ pub fn run(a: &DemoArgs) -> Result<()> {
             json: false,
         })?;
         super::trace::run(&TraceArgs {
-            field: field_path.clone(),
+            field: Some(field_path.clone()),
+            scene: None,
+            instance_ids: None,
             rays: rays_path,
             output: hits_path,
             any_hit: false,
@@ -68,7 +70,13 @@ pub fn run(a: &DemoArgs) -> Result<()> {
     let picture = a.output_dir.join("demo.png");
     stdout_line(&format!("\n4. render {} -o {}", field_path.display(), picture.display()))?;
     super::render::run(&RenderArgs {
-        field: field_path,
+        field: Some(field_path),
+        scene: None,
+        frames: None,
+        moves: Vec::new(),
+        path: None,
+        spin: 0.0,
+        frame_ms: 40,
         output: picture.clone(),
         width: None,
         height: None,

@@ -9,8 +9,10 @@ pub mod dump;
 pub mod gen_scene;
 pub mod merge;
 pub mod pack;
+pub mod picture;
 pub mod rays;
 pub mod render;
+pub mod scene;
 pub mod trace;
 
 use crate::args::CacheChoice;

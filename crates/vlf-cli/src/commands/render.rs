@@ -1,225 +1,43 @@
 //! `vlf-bake render`: Whitted ray tracing of a field into a PNG, and optionally a picture of the
-//! work per pixel. Which camera and lights are used is `vlf_render::setup`'s decision.
+//! work per pixel (`--scene`: of a scene file, [`super::scene`]).
 
-use super::stdout_line;
-use crate::args::{RenderArgs, View, WorkArg};
-use crate::limits::check_memory;
+use super::picture::{setup, summarise};
+use crate::args::RenderArgs;
 use crate::progress::Bar;
 use crate::values::BadUsage;
-use anyhow::{Context, Result, anyhow};
+use anyhow::{Context, Result};
 use std::io::Write;
-use std::path::PathBuf;
 use std::time::Instant;
 use vlf_bake::Progress;
 use vlf_bake::atomic::write_atomically;
-use vlf_bake::params::human_bytes;
-use vlf_render::setup::{CameraChoice, CameraError, CameraRequest, Framing, LightChoice, choose_camera, choose_lights};
-use vlf_render::{Background, Frame, Scene, SceneBounds, SceneOptions, Settings, WorkMetric};
+use vlf_render::{Scene, SceneBounds, SceneOptions};
 use vlf_runtime::Field;
-
-/// What `render` prints, and its `--json` keys.
-#[derive(serde::Serialize)]
-struct RenderSummary {
-    output: PathBuf,
-    width: u32,
-    height: u32,
-    samples_per_pixel: u32,
-    camera: String,
-    lights: String,
-    light_count: usize,
-    seconds: f64,
-    rays: RaysSummary,
-    mrays_per_s: f64,
-    work: WorkSummary,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    work_image: Option<WorkImageSummary>,
-    threads: usize,
-}
-
-#[derive(serde::Serialize)]
-struct RaysSummary {
-    primary: u64,
-    shadow: u64,
-    reflection: u64,
-    refraction: u64,
-    total: u64,
-}
-
-#[derive(serde::Serialize)]
-struct WorkSummary {
-    rays_reaching_the_scene: u64,
-    tiles: u64,
-    leaves: u64,
-    triangle_tests: u64,
-}
-
-#[derive(serde::Serialize)]
-struct WorkImageSummary {
-    path: PathBuf,
-    metric: &'static str,
-    scale_max: u64,
-    max: u64,
-    mean: f64,
-}
 
 /// `vlf-bake render`: ray traces a picture of a field (and of its work) and prints the summary.
 pub fn run(a: &RenderArgs) -> Result<()> {
     // Every flag's range was checked as it was parsed (`crate::values`).
-    let field = Field::open(&a.field)?;
+    let Some(path) = &a.field else { return super::scene::render(a) };
+    // (clap does not enforce `requires` against an argument that conflicts with one present.)
+    if a.frames.is_some() || !a.moves.is_empty() || a.path.is_some() {
+        return Err(
+            BadUsage("--frames, --move and --path need --scene: a field alone has nothing to move".into()).into()
+        );
+    }
+    let field = Field::open(path)?;
     let bounds = SceneBounds::of(&field);
-    let (center, radius) = (bounds.center, bounds.radius);
     let cameras: Vec<_> = field.cameras().collect();
-    let request = CameraRequest {
-        camera: a.camera,
-        framing: a.view.map(|v| match v {
-            View::Outside => Framing::Outside,
-            View::Inside => Framing::Inside,
-        }),
-        eye: a.eye,
-        target: a.target,
-        up: a.up,
-        fov_degrees: a.fov,
-        width: a.width,
-        height: a.height,
-    };
-    let field_name = a.field.display();
-    let CameraChoice { view, width, height, description: camera_name } = choose_camera(&request, &cameras, &bounds)
-        .map_err(|e| match e {
-            CameraError::NoSuchCamera { index, count } => {
-                anyhow!("--camera {index}: {field_name} has {count} camera(s)")
-            }
-            CameraError::Degenerate { index } => {
-                anyhow!("camera {index} of {field_name} cannot be used: its frame is degenerate")
-            }
-            CameraError::EyeIsTarget => BadUsage("--eye and --target are the same point".into()).into(),
-            CameraError::UpAlongSight => BadUsage(format!(
-                "--up {} is along the line of sight from --eye to the target, so it gives the picture no up: \
-                 give a direction across it",
-                a.up.map(|c| c.to_string()).join(",")
-            ))
-            .into(),
-        })?;
-    // Before anything of the picture's size is allocated.
-    let (frame_bytes, picture_bytes) =
-        (Frame::bytes(width, height), vlf_render::picture_bytes_at_most(width, height, a.work_image.is_some()));
-    check_memory(
-        frame_bytes.saturating_add(picture_bytes),
-        &format!(
-            "a {width}×{height} picture (frame {}, {} {})",
-            human_bytes(frame_bytes),
-            if a.work_image.is_some() { "picture and work picture" } else { "picture" },
-            human_bytes(picture_bytes)
-        ),
-    )?;
     let field_lights: Vec<_> = field.lights().collect();
-    let LightChoice { lights, description: lights_name } =
-        choose_lights(&a.lights, a.default_lights, &field_lights, &view, center, radius);
-
-    let settings = Settings {
-        width,
-        height,
-        samples: a.samples,
-        max_depth: a.bounces,
-        ambient: a.ambient,
-        background: a.background.map_or(Background::Sky, Background::Solid),
-    };
+    let s = setup(a, &cameras, &field_lights, &bounds, &path.display().to_string(), 1)?;
     let options = SceneOptions { smooth: !a.flat, ..SceneOptions::default() };
     let scene = Scene::from_field(&field, &options);
     let bar = Bar::new(a.quiet || a.json);
-    bar.begin("rendering rows", height as u64);
+    bar.begin("rendering rows", s.settings.height as u64);
     let start = Instant::now();
-    let frame = vlf_render::render(field.view(), &scene, &view, &lights, &settings, &|rows| bar.advance(rows));
+    let frame = vlf_render::render(field.view(), &scene, &s.view, &s.lights, &s.settings, &|rows| bar.advance(rows));
     let seconds = start.elapsed().as_secs_f64();
     bar.end();
-
-    {
-        let png = vlf_render::encode_png(frame.width, frame.height, &vlf_render::to_srgb8(&frame, a.exposure))?;
-        write_atomically(&a.output, |w| w.write_all(&png))
-            .with_context(|| format!("cannot write {}", a.output.display()))?;
-    }
-    let work_image = match &a.work_image {
-        None => None,
-        Some(path) => {
-            let metric = match a.work {
-                WorkArg::Tests => WorkMetric::TriangleTests,
-                WorkArg::Tiles => WorkMetric::Cells,
-                WorkArg::Leaves => WorkMetric::Leaves,
-                WorkArg::Rays => WorkMetric::Rays,
-            };
-            let image = vlf_render::work_image(&frame, metric, a.work_max);
-            let png = vlf_render::encode_png(frame.width, frame.height, &image.rgb)?;
-            write_atomically(path, |w| w.write_all(&png))
-                .with_context(|| format!("cannot write {}", path.display()))?;
-            Some(WorkImageSummary {
-                path: path.clone(),
-                metric: metric.describe(),
-                scale_max: image.scale_max,
-                max: image.max,
-                mean: image.mean,
-            })
-        }
-    };
-    let r = frame.rays;
-    let summary = RenderSummary {
-        output: a.output.clone(),
-        width: frame.width,
-        height: frame.height,
-        samples_per_pixel: a.samples * a.samples,
-        camera: camera_name,
-        lights: lights_name.to_string(),
-        light_count: lights.len(),
-        seconds,
-        rays: RaysSummary {
-            primary: r.primary,
-            shadow: r.shadow,
-            reflection: r.reflection,
-            refraction: r.refraction,
-            total: r.total(),
-        },
-        mrays_per_s: r.total() as f64 / seconds.max(1e-12) / 1e6,
-        work: WorkSummary {
-            rays_reaching_the_scene: frame.total_work.rays,
-            tiles: frame.total_work.cells,
-            leaves: frame.total_work.leaves,
-            triangle_tests: frame.total_work.triangle_tests,
-        },
-        work_image,
-        threads: rayon::current_num_threads(),
-    };
-    if a.json {
-        return stdout_line(&serde_json::to_string(&summary)?);
-    }
-    if a.quiet {
-        return Ok(());
-    }
-    let s = &summary;
-    let mut text = format!(
-        "rendered {} ({}×{}, {} samples per pixel) in {:.2} s: {} rays ({} primary, {} shadow, {} reflected, {} refracted), {:.2} Mrays/s on {} threads\n  camera {}; {} light(s), {}",
-        s.output.display(),
-        s.width,
-        s.height,
-        s.samples_per_pixel,
-        s.seconds,
-        s.rays.total,
-        s.rays.primary,
-        s.rays.shadow,
-        s.rays.reflection,
-        s.rays.refraction,
-        s.mrays_per_s,
-        s.threads,
-        s.camera,
-        s.light_count,
-        s.lights
-    );
-    if let Some(w) = &s.work_image {
-        text.push_str(&format!(
-            "\n  work picture {}: {} per pixel, black = 0 to white = {} (largest {}, mean {:.1})",
-            w.path.display(),
-            w.metric,
-            w.scale_max,
-            w.max,
-            w.mean
-        ));
-    }
-    stdout_line(&text)
+    let png = vlf_render::encode_png(frame.width, frame.height, &vlf_render::to_srgb8(&frame, a.exposure))?;
+    write_atomically(&a.output, |w| w.write_all(&png))
+        .with_context(|| format!("cannot write {}", a.output.display()))?;
+    summarise(a, &s, &frame, None, seconds)
 }

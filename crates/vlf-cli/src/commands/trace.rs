@@ -2,6 +2,7 @@
 
 use super::stdout_line;
 use crate::args::TraceArgs;
+use crate::values::BadUsage;
 use anyhow::{Context, Result, bail};
 use std::io::Write;
 use std::path::Path;
@@ -22,10 +23,8 @@ fn read_rays(path: &Path) -> Result<Vec<Ray>> {
     Ok(bytemuck::pod_collect_to_vec(&bytes))
 }
 
-/// `vlf-bake trace`: answers every ray of a rays file and writes the hits file.
-pub fn run(a: &TraceArgs) -> Result<()> {
-    let field = Field::open(&a.field)?;
-    let rays = read_rays(&a.rays)?;
+/// The hits of `rays` in `field`, and the seconds spent tracing.
+fn trace_field(a: &TraceArgs, field: &Field, rays: &[Ray]) -> (Vec<Hit>, f64) {
     let mut hits = vec![Hit::MISS; rays.len()];
     let start = Instant::now();
     if a.any_hit {
@@ -35,9 +34,30 @@ pub fn run(a: &TraceArgs) -> Result<()> {
             *h = Hit::record(view.any_hit_counted(r, &mut ()));
         });
     } else {
-        field.par_closest_hits(&rays, &mut hits);
+        field.par_closest_hits(rays, &mut hits);
     }
-    let seconds = start.elapsed().as_secs_f64();
+    (hits, start.elapsed().as_secs_f64())
+}
+
+/// `vlf-bake trace`: answers every ray of a rays file and writes the hits file.
+pub fn run(a: &TraceArgs) -> Result<()> {
+    // (clap does not enforce `requires` against an argument that conflicts with one present.)
+    if a.instance_ids.is_some() && a.scene.is_none() {
+        return Err(BadUsage("--instance-ids needs --scene: a field's hits name no instance".into()).into());
+    }
+    let rays;
+    let (hits, seconds) = match (&a.field, &a.scene) {
+        (_, Some(scene)) => {
+            rays = read_rays(&a.rays)?;
+            super::scene::trace(a, scene, &rays)?
+        }
+        (Some(path), None) => {
+            let field = Field::open(path)?;
+            rays = read_rays(&a.rays)?;
+            trace_field(a, &field, &rays)
+        }
+        (None, None) => unreachable!("clap requires a field or --scene"),
+    };
     write_atomically(&a.output, |w| w.write_all(bytemuck::cast_slice(&hits)))
         .with_context(|| format!("cannot write hits file {}", a.output.display()))?;
     let hit_count = hits.iter().filter(|h| h.prim != u32::MAX).count();

@@ -13,7 +13,25 @@
 //! into many. The old mid-point BSP copied a pile of coincident triangles into every one of its
 //! `2^D` leaves.
 
-use crate::params::DepthPolicy;
+/// Default target of triangles per BSP leaf.
+pub const DEFAULT_LEAF_SIZE: u32 = 4;
+/// Default largest BSP depth.
+pub const DEFAULT_MAX_DEPTH: u32 = 8;
+
+/// How a tile's z range is cut into leaves (`formats/vlf.md` §6.3): a leaf of at most
+/// `leaf_size` refs is not split, and splits go at most `max_depth` deep (a tile has at most
+/// `2^max_depth` leaves). `max_depth = 0` gives the paper's "linear tiles", one leaf each.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct DepthPolicy {
+    pub leaf_size: u32,
+    pub max_depth: u32,
+}
+
+impl Default for DepthPolicy {
+    fn default() -> Self {
+        DepthPolicy { leaf_size: DEFAULT_LEAF_SIZE, max_depth: DEFAULT_MAX_DEPTH }
+    }
+}
 
 /// The cost of visiting a leaf, in ref tests (tuned by `vlf-bench peers --sweep`): a leaf visit
 /// computes the ray's box and starts a group of sixteen box tests, and ends a ray's search only

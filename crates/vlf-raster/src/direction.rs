@@ -1,0 +1,240 @@
+//! The per-direction kernel (paper §3.1, §3.2, §4 and §5): rotate the triangles into one
+//! direction's canonical frame, rasterise every triangle conservatively into the `n × n` tiles
+//! with the box of its part in each ([`Grid::rasterize`]), cut each tile's z range into leaves
+//! ([`crate::leaves`]) and write the tile's block (`formats/vlf.md` §5.6, [`Grid::write_tile`]).
+//!
+//! [`build_direction`] does all of it for every triangle of a scene (the bake); the parts are
+//! public so that a field's tiles can be rebuilt one at a time in memory (`vlf-scene`'s edits).
+
+use crate::leaves::{DepthPolicy, boundaries};
+use crate::raster::{Part, rasterize};
+use vlf_format::block::{BOX_CELLS, MAX_LEAVES, Ref, block_words, write_block};
+use vlf_format::{EMPTY_TILE, StatisticsRecord, Z_LEVELS, size};
+use vlf_geom::frame::mul;
+
+/// The tile grid of a field, as every one of its directions lays it out: what rasterising a
+/// triangle into a direction needs besides the direction's rotation.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Grid {
+    /// Tiles per side, `n`.
+    pub tiles: u32,
+    /// The radius `R` of the bounding sphere the grid covers, around the field's centre.
+    pub radius: f64,
+    /// The conservative margin `μ` (`formats/vlf.md` §6.2), world units.
+    pub margin: f64,
+    /// How each tile's z range is cut into leaves.
+    pub depth: DepthPolicy,
+}
+
+/// One rasterised (tile, triangle) pair: the triangle's z range in the tile in quantized levels
+/// and its box in box cells (`x_lo, x_hi, y_lo, y_hi`), both grown by `μ` and rounded outward.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Entry {
+    /// The tile, `row · n + column`.
+    pub tile: u32,
+    /// The triangle id.
+    pub tri: u32,
+    /// The z range, in quantized levels, closed.
+    pub z: [u16; 2],
+    /// The box: `x_lo, x_hi, y_lo, y_hi` in cells of the tile.
+    pub cells: [u8; 4],
+}
+
+/// The size of a tile's block: its leaves `K` and refs `m` (a triangle counted once per leaf).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TileBlock {
+    pub leaves: usize,
+    pub refs: u64,
+}
+
+/// A direction's blocks would not fit the format's 32-bit offsets: `count` words already written.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TooLarge {
+    pub count: u64,
+}
+
+/// Reusable buffers: one per thread.
+#[derive(Default)]
+pub struct Scratch {
+    projected: Vec<[f64; 3]>,
+    entries: Vec<Entry>,
+    sorted: Vec<Entry>,
+    tile_start: Vec<u32>,
+    ranges: Vec<(u32, u32)>,
+    bounds: Vec<u32>,
+    leaf_refs: Vec<Vec<Ref>>,
+}
+
+/// One direction's part of the TILES and LEAVES sections.
+pub struct DirectionData {
+    /// The `n²` TILES entries: each tile's block offset in `words`, or `EMPTY_TILE`.
+    pub tiles: Vec<u32>,
+    /// The direction's blocks, in tile order.
+    pub words: Vec<u64>,
+    pub stats: StatisticsRecord,
+}
+
+impl DirectionData {
+    /// Bytes this direction adds to the file.
+    pub fn bytes(&self) -> u64 {
+        size::direction(self.tiles.len() as u64, self.words.len() as u64)
+    }
+}
+
+impl Grid {
+    /// The width of a tile, world units.
+    pub fn tile_width(&self) -> f64 {
+        2.0 * self.radius / self.tiles as f64
+    }
+
+    /// The canonical coordinates of `v` (relative to the field's centre) in the direction whose
+    /// rotation is `m`: `(u, v)` in tile units from the grid's corner, `z` in world units.
+    #[inline]
+    pub fn project(&self, m: &[f64; 9], v: [f64; 3]) -> [f64; 3] {
+        let (r, w) = (self.radius, self.tile_width());
+        let p = mul(m, v);
+        [(p[0] + r) / w, (p[1] + r) / w, p[2]]
+    }
+
+    /// Rasterises triangle `tri`, whose corners [`Grid::project`] gave as `a, b, c`: calls `emit`
+    /// with its entry in every tile its projection touches, grown by the margin, row by row.
+    #[inline]
+    pub fn rasterize(&self, tri: u32, a: [f64; 3], b: [f64; 3], c: [f64; 3], mut emit: impl FnMut(Entry)) {
+        let (n, r, margin) = (self.tiles, self.radius, self.margin);
+        let e = margin / self.tile_width();
+        let z_step = 2.0 * r / Z_LEVELS as f64;
+        // Quantisation, rounding outward. (Casts truncate toward zero, which equals floor here
+        // because negative values clamp to 0 anyway, and avoid a libm call.)
+        let level_below = |z: f64| (((z + r) / z_step) as i64).clamp(0, Z_LEVELS as i64) as u16;
+        let level_above = |z: f64| {
+            let x = (z + r) / z_step;
+            (x as i64 + ((x as i64 as f64) < x) as i64).clamp(0, Z_LEVELS as i64) as u16
+        };
+        let cell =
+            |u: f64, tile: u32| (((u - tile as f64) * BOX_CELLS as f64) as i64).clamp(0, BOX_CELLS as i64 - 1) as u8;
+        rasterize(a, b, c, n, e, |ix, iy, p: Part| {
+            emit(Entry {
+                tile: iy * n + ix,
+                tri,
+                z: [level_below(p.z.0 - margin), level_above(p.z.1 + margin)],
+                cells: [cell(p.u.0 - e, ix), cell(p.u.1 + e, ix), cell(p.v.0 - e, iy), cell(p.v.1 + e, iy)],
+            });
+        });
+    }
+
+    /// Appends to `out` the block of a tile whose entries are `entries` (at least one, in
+    /// increasing triangle id): its leaves by the depth policy, each ref in every leaf its z
+    /// range meets. `TooLarge` if the block would end past the format's 32-bit offsets.
+    pub fn write_tile(&self, entries: &[Entry], s: &mut Scratch, out: &mut Vec<u64>) -> Result<TileBlock, TooLarge> {
+        debug_assert!(!entries.is_empty() && entries.windows(2).all(|w| w[0].tri < w[1].tri));
+        // The tile's z range, non-empty.
+        s.ranges.clear();
+        s.ranges.extend(entries.iter().map(|en| (en.z[0] as u32, en.z[1] as u32)));
+        let lo = s.ranges.iter().map(|r| r.0).min().unwrap_or(0);
+        let hi = s.ranges.iter().map(|r| r.1).max().unwrap_or(Z_LEVELS);
+        let (lo, hi) = if lo < hi {
+            (lo, hi)
+        } else if hi < Z_LEVELS {
+            (lo, hi + 1)
+        } else {
+            (lo - 1, hi)
+        };
+        boundaries(&s.ranges, lo, hi, &self.depth, &mut s.bounds);
+        let k = s.bounds.len() - 1;
+        debug_assert!(k as u32 <= MAX_LEAVES);
+        // Each ref goes to every leaf its closed range meets; entries are in id order, so each
+        // leaf's refs are too.
+        s.leaf_refs.resize_with(k.max(s.leaf_refs.len()), Vec::new);
+        for leaf in &mut s.leaf_refs[..k] {
+            leaf.clear();
+        }
+        for en in entries {
+            let (z0, z1) = (en.z[0] as u32, en.z[1] as u32);
+            let first = s.bounds[1..k].partition_point(|&b| b < z0);
+            for (leaf, refs) in s.leaf_refs[first..k].iter_mut().enumerate() {
+                if s.bounds[first + leaf] > z1 {
+                    break;
+                }
+                refs.push(Ref { id: en.tri, x: [en.cells[0], en.cells[1]], y: [en.cells[2], en.cells[3]] });
+            }
+        }
+        let refs: u64 = s.leaf_refs[..k].iter().map(|l| l.len() as u64).sum();
+        let offset = out.len() as u64;
+        if offset + block_words(k, refs as usize) as u64 > u32::MAX as u64 {
+            return Err(TooLarge { count: offset });
+        }
+        let bounds: Vec<u16> = s.bounds.iter().map(|&b| b as u16).collect();
+        let leaves: Vec<&[Ref]> = s.leaf_refs[..k].iter().map(|l| l.as_slice()).collect();
+        write_block(&bounds, &leaves, out);
+        Ok(TileBlock { leaves: k, refs })
+    }
+}
+
+/// Builds the direction whose rotation is `m` over `triangles` (three indices each into
+/// `vertices`, which are relative to the field's centre): its TILES entries, its blocks and
+/// statistics. A triangle's id is its index in `triangles`.
+pub fn build_direction(
+    vertices: &[[f64; 3]],
+    triangles: &[[u32; 3]],
+    grid: &Grid,
+    m: &[f64; 9],
+    s: &mut Scratch,
+) -> Result<DirectionData, TooLarge> {
+    let n2 = grid.tiles as usize * grid.tiles as usize;
+    s.projected.clear();
+    s.projected.extend(vertices.iter().map(|&v| grid.project(m, v)));
+    s.entries.clear();
+    for (id, tri) in triangles.iter().enumerate() {
+        let [a, b, c] = tri.map(|k| s.projected[k as usize]);
+        let entries = &mut s.entries;
+        grid.rasterize(id as u32, a, b, c, |en| entries.push(en));
+    }
+
+    // Counting sort by tile; stable, so each tile's entries stay in triangle-id order.
+    s.tile_start.clear();
+    s.tile_start.resize(n2 + 1, 0);
+    for en in &s.entries {
+        s.tile_start[en.tile as usize + 1] += 1;
+    }
+    for i in 0..n2 {
+        s.tile_start[i + 1] += s.tile_start[i];
+    }
+    s.sorted.clear();
+    s.sorted.resize(s.entries.len(), Entry::default());
+    {
+        let mut cursor = s.tile_start.clone();
+        for en in &s.entries {
+            let slot = &mut cursor[en.tile as usize];
+            s.sorted[*slot as usize] = *en;
+            *slot += 1;
+        }
+    }
+
+    let mut out = DirectionData {
+        tiles: Vec::with_capacity(n2),
+        words: Vec::with_capacity(s.entries.len() + n2),
+        stats: StatisticsRecord::zeroed_record(),
+    };
+    out.stats.tile_count = n2 as u64;
+    let sorted = std::mem::take(&mut s.sorted);
+    for tile in 0..n2 {
+        let entries = &sorted[s.tile_start[tile] as usize..s.tile_start[tile + 1] as usize];
+        if entries.is_empty() {
+            out.tiles.push(EMPTY_TILE);
+            out.stats.empty_tiles += 1;
+            continue;
+        }
+        let offset = out.words.len() as u32;
+        let block = grid.write_tile(entries, s, &mut out.words)?;
+        out.tiles.push(offset);
+        let depth = (block.leaves as u64).next_power_of_two().trailing_zeros();
+        out.stats.tile_triangle_sum += entries.len() as u64;
+        out.stats.max_tile_triangles = out.stats.max_tile_triangles.max(entries.len() as u32);
+        out.stats.max_depth_used = out.stats.max_depth_used.max(depth);
+        out.stats.depth_histogram[depth as usize] += 1;
+        out.stats.leaf_count += block.leaves as u64;
+        out.stats.id_count += block.refs;
+    }
+    s.sorted = sorted;
+    Ok(out)
+}
