@@ -44,11 +44,13 @@
 
 #![deny(missing_docs)]
 
+mod all_hits;
 mod boundary;
 mod info;
 mod scene;
 mod types;
 
+pub use all_hits::*;
 use boundary::*;
 pub use info::*;
 pub use scene::*;
