@@ -8,8 +8,8 @@
 # (or $PYTHON) on first use and reused after. It gets numpy, pytest, trimesh and embreex from
 # PyPI, and Open3D if it installs for this Python (set VLF_PY_OPEN3D=0 to skip it; its tests are
 # then skipped). The package is installed the way a user installs it, `pip install
-# crates/vlf-python` (maturin builds the extension with cargo); $VLF_PY_PROFILE picks the cargo
-# profile (default `release`; `.ci/run` uses `test`, whose artifacts `cargo test` has built).
+# crates/vlf-python` (maturin builds the extension with cargo, in the release profile, as a user's
+# install does; $VLF_PY_PROFILE picks another, such as `dev`).
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 root="$(cd "$here/../.." && pwd)"
