@@ -1,8 +1,8 @@
 //! Every hit along a ray, and how many there are: the queries behind sensor simulation, visibility
 //! counts and inside/outside tests (an odd number of crossings), which a closest hit cannot answer.
 //!
-//! Built on the walk every query shares ([`FieldView::for_each_leaf`]: the leaves along the ray,
-//! front to back) and on the leaf kernel ([`TriRay::hits_in`], the watertight test), so a hit here
+//! Built on the walk every query shares (the leaves along the ray, front to back, each leaf's
+//! refs filtered by their boxes as the closest-hit query filters them) and on the leaf kernel ([`TriRay::hits_in`], the watertight test), so a hit here
 //! is the hit the brute force ([`vlf_geom::BruteForce::all_hits`]) finds on that triangle, bit for
 //! bit. Two things differ from the closest-hit query:
 //!
@@ -116,8 +116,10 @@ impl FieldView<'_> {
         let triangles = Stored(self.reader.triangles);
         // The end of the interval still searched: the k-th hit's t once there are k hits.
         let mut limit = ray.tmax;
-        self.for_each_leaf(ray, &mut (), |ids, exit_t| {
-            tri_ray.hits_in(&triangles, ids.iter().copied(), &mut limit, &mut (), |h, limit| {
+        self.for_each_leaf_filtered(ray, |passing, exit_t| {
+            // The refs whose boxes meet the ray over the leaf, up to the k-th hit once known.
+            let ids = passing(exit_t.min(limit as f64));
+            tri_ray.hits_in(&triangles, ids, &mut limit, &mut (), |h, limit| {
                 let Err(at) = hits.binary_search_by(|x| order(x, h.t, h.prim)) else { return };
                 if at >= max_hits {
                     return;
