@@ -41,9 +41,11 @@ def main(mesh_path, out_path, width=320, height=240):
         f.write(shade.astype(np.uint8).tobytes())
 
     layers = field.hit_counts(eye, directions).reshape(height, width)
-    every = field.all_hits(eye, directions[:: width * 10], max_hits=8)
+    middle_row = directions[(height // 2) * width : (height // 2 + 1) * width]
+    every = field.all_hits(eye, middle_row, max_hits=8)
     print(f"{seen.sum()} of {width * height} pixels see the mesh; up to {layers.max()} surfaces behind a pixel")
-    print(f"first ray with hits: t = {every.ray(int(np.argmax(every.counts))).t}")
+    deepest = int(np.argmax(every.counts))
+    print(f"the middle row's pixel {deepest} meets surfaces at t = {every.ray(deepest).t}")
 
     points = center + (np.random.default_rng(0).random((5, 3)) - 0.5) * radius
     inside = field.hit_counts(points, [0.43, 0.61, 0.65]) % 2 == 1

@@ -212,3 +212,18 @@ def test_open3d_shim_against_open3d(o3d):
     key = lambda lx: per_ray_sets(lx["ray_ids"].astype(np.int64), lx["geometry_ids"].astype(np.int64) * 10**6 + lx["primitive_ids"], len(o))
     sa, sb = key(la), key(lb)
     assert sum(1 for i in range(len(o)) if ok[i] and sa[i] != sb[i]) <= 2
+
+
+def test_shims_bake_tiny_meshes_with_the_default_options():
+    # 16 KiB per triangle cannot hold even the coarsest field of a mesh of one triangle: the shims
+    # give small meshes a budget of at least 4 MiB.
+    v = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], dtype=np.float32)
+    scene = vlf.open3d.RaycastingScene()
+    scene.add_triangles(v, np.array([[0, 1, 2]], dtype=np.uint32))
+    ans = scene.cast_rays(np.array([[0.2, 0.2, 1, 0, 0, -1]], dtype=np.float32))
+    assert ans["t_hit"].tolist() == [1.0] and ans["primitive_ids"].tolist() == [0]
+    assert scene.field.bake_info["cache"] in ("miss", "hit")
+    r = vlf.trimesh.RayMeshIntersector(Mesh(v, np.array([[0, 1, 2]])))
+    assert r.intersects_first([[0.2, 0.2, 1]], [[0, 0, -1]]).tolist() == [0]
+    with pytest.raises(vlf.BakeError, match="budget"):
+        vlf.bake_arrays(v, [[0, 1, 2]], no_cache=True)

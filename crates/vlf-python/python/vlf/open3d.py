@@ -61,7 +61,6 @@ class RaycastingScene:
         if device is not None and "CPU" not in str(device).upper():
             raise ValueError(f"vlf.open3d.RaycastingScene runs on the CPU, not on {device}")
         self._options = dict(bake_options)
-        self._options.setdefault("cache_dir", vlf.default_cache_dir())
         if nthreads:
             self._options.setdefault("threads", int(nthreads))
         self._vertices: list = []
@@ -109,7 +108,7 @@ class RaycastingScene:
             vertices = np.concatenate(self._vertices)
             faces = np.concatenate([f + o for f, o in zip(self._faces, offsets)])
             starts = np.cumsum([0] + [len(f) for f in self._faces])
-            field = vlf.bake_arrays(vertices, faces, name="open3d", **self._options)
+            field = vlf.bake_arrays(vertices, faces, name="open3d", **vlf._shim_options(self._options, len(faces)))
             source = field.source_indices()
             geometry = np.searchsorted(starts, source, side="right") - 1
             self._geometry = geometry.astype(np.uint32)

@@ -42,7 +42,6 @@ class RayMeshIntersector:
     def __init__(self, mesh: Any, **bake_options: Any):
         self.mesh = mesh
         self._options = dict(bake_options)
-        self._options.setdefault("cache_dir", vlf.default_cache_dir())
         self._threads = self._options.get("threads")
         self._field: Optional[vlf.Field] = None
         self._face: Optional[np.ndarray] = None
@@ -59,7 +58,8 @@ class RayMeshIntersector:
         mesh's vertices or faces change."""
         key = self._mesh_key()
         if self._field is None or key != self._key:
-            self._field = vlf.bake_arrays(self.mesh.vertices, self.mesh.faces, name="trimesh", **self._options)
+            options = vlf._shim_options(self._options, len(self.mesh.faces))
+            self._field = vlf.bake_arrays(self.mesh.vertices, self.mesh.faces, name="trimesh", **options)
             self._face = self._field.source_indices()
             self._key = key
         return self._field
