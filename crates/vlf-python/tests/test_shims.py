@@ -227,3 +227,15 @@ def test_shims_bake_tiny_meshes_with_the_default_options():
     assert r.intersects_first([[0.2, 0.2, 1]], [[0, 0, -1]]).tolist() == [0]
     with pytest.raises(vlf.BakeError, match="budget"):
         vlf.bake_arrays(v, [[0, 1, 2]], no_cache=True)
+
+
+def test_trimesh_shim_notices_changes_to_a_trimesh_mesh():
+    trimesh = pytest.importorskip("trimesh")
+    mesh = trimesh.creation.box()
+    r = vlf.trimesh.RayMeshIntersector(mesh, directions=9, tiles=4, no_cache=True)
+    assert r.intersects_any([[0, 0, 5]], [[0, 0, -1]]).tolist() == [True]
+    first = r.field
+    assert r.field is first  # no change, no bake
+    mesh.apply_translation([10, 0, 0])
+    assert r.intersects_any([[0, 0, 5]], [[0, 0, -1]]).tolist() == [False]
+    assert r.field is not first

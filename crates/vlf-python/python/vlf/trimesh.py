@@ -10,7 +10,8 @@ works as the mesh.
 
 The mesh is baked on first use, through the bake cache (``cache_dir``, default
 :func:`vlf.default_cache_dir`): a later run on the same mesh copies the field from the cache
-instead of baking it again. A mesh that changes (its vertices or faces) is baked again.
+instead of baking it again. A mesh that changes is baked again (trimesh tracks changes to its
+meshes; of another object, replaced ``vertices`` or ``faces`` arrays are noticed).
 
 Differences from trimesh's own intersectors, all on the side of exactness: hits are found by a
 watertight test (a ray through an edge shared by two faces hits at least one of them), every hit
@@ -45,12 +46,19 @@ class RayMeshIntersector:
         self._threads = self._options.get("threads")
         self._field: Optional[vlf.Field] = None
         self._face: Optional[np.ndarray] = None
-        self._key: Optional[bytes] = None
+        self._key: Optional[tuple] = None
 
-    def _mesh_key(self) -> bytes:
-        v = np.ascontiguousarray(self.mesh.vertices, dtype=np.float64)
-        f = np.ascontiguousarray(self.mesh.faces, dtype=np.int64)
-        return v.tobytes() + b"|" + f.tobytes()
+    def _mesh_key(self) -> tuple:
+        """What tells a changed mesh: a trimesh mesh's hash of its contents (cached by trimesh
+        until the mesh changes, so cheap to ask every query), else the identity and shape of the
+        arrays (a plain object whose arrays are replaced)."""
+        if type(self.mesh).__hash__ not in (None, object.__hash__):
+            try:
+                return ("contents", hash(self.mesh))
+            except TypeError:
+                pass
+        v, f = self.mesh.vertices, self.mesh.faces
+        return ("arrays", id(v), id(f), np.shape(v), np.shape(f))
 
     @property
     def field(self) -> vlf.Field:
