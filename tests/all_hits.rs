@@ -69,18 +69,18 @@ fn check_ray(field: &Field, brute: &BruteForce<'_>, ray: &Ray, batch: &[Hit], co
     let want = brute.all_hits(ray, usize::MAX);
     t.hits += want.len() as u64;
     t.multiple += (want.len() > 1) as u64;
-    let got = field.all_hits(ray, usize::MAX);
+    let got = field.view().all_hits(ray, usize::MAX);
     if !same(&got, &want) {
         t.fail(format!("ray {ray:?}: field {got:?}, brute force {want:?}"));
     }
     if !same(batch, &want) {
         t.fail(format!("ray {ray:?}: parallel batch {batch:?}, brute force {want:?}"));
     }
-    if count as usize != want.len() || field.hit_count(ray) as usize != want.len() {
+    if count as usize != want.len() || field.view().hit_count(ray) as usize != want.len() {
         t.fail(format!("ray {ray:?}: count {count}, brute force {} hits", want.len()));
     }
     for k in MAXIMA {
-        let got = field.all_hits(ray, k);
+        let got = field.view().all_hits(ray, k);
         if !same(&got, &want[..k.min(want.len())]) {
             t.fail(format!("ray {ray:?}: first {k} {got:?}, brute force {want:?}"));
         }
@@ -122,13 +122,17 @@ fn check(label: &str, field: &Field, per_family: usize, seed: u64) -> Tally {
     let brute = BruteForce::relative(&tris, field.origin());
     let mut total = Tally::default();
     for (family, rays) in ray_families(field, per_family, seed) {
-        let lists = field.par_all_hits_batch(&rays, usize::MAX);
-        assert_eq!(lists, field.all_hits_batch(&rays, usize::MAX), "{label} / {family}: one core and all differ");
-        let firsts = field.par_all_hits_batch(&rays, 1);
+        let lists = field.view().par_all_hits_batch(&rays, usize::MAX);
+        assert_eq!(
+            lists,
+            field.view().all_hits_batch(&rays, usize::MAX),
+            "{label} / {family}: one core and all differ"
+        );
+        let firsts = field.view().par_all_hits_batch(&rays, 1);
         let mut counts = vec![0; rays.len()];
-        field.par_hit_counts(&rays, &mut counts);
+        field.view().par_hit_counts(&rays, &mut counts);
         let mut serial = vec![0; rays.len()];
-        field.hit_counts(&rays, &mut serial);
+        field.view().hit_counts(&rays, &mut serial);
         assert_eq!(counts, serial, "{label} / {family}: counts on one core and all differ");
         let tally = rays
             .par_iter()
@@ -207,7 +211,7 @@ fn every_ray_from_inside_a_closed_box_counts_a_crossing() {
         })
         .collect();
     let mut counts = vec![0; rays.len()];
-    field.par_hit_counts(&rays, &mut counts);
+    field.view().par_hit_counts(&rays, &mut counts);
     for (ray, &c) in rays.iter().zip(&counts) {
         assert_eq!(c as usize, brute.all_hits(ray, usize::MAX).len(), "ray {ray:?}");
         assert!(c >= 1, "ray {ray:?} escaped the box");
@@ -220,10 +224,10 @@ fn invalid_rays_and_a_zero_maximum_have_no_hits() {
     let scene = Scene::from_triangles("box", &tris).unwrap();
     let (_dir, field) = bake(&scene, 9, 4, depth(4, 8));
     let through = Ray::new([0.3, 0.1, 5.0], [0.0, 0.0, -1.0]);
-    assert_eq!(field.hit_count(&through), 2);
-    assert_eq!(field.all_hits(&through, usize::MAX).len(), 2);
-    assert!(field.all_hits(&through, 0).is_empty());
-    let hits = field.all_hits(&through, usize::MAX);
+    assert_eq!(field.view().hit_count(&through), 2);
+    assert_eq!(field.view().all_hits(&through, usize::MAX).len(), 2);
+    assert!(field.view().all_hits(&through, 0).is_empty());
+    let hits = field.view().all_hits(&through, usize::MAX);
     assert!(hits[0].t == 4.0 && hits[1].t == 6.0, "{hits:?}");
     for bad in [
         Ray::new([f32::NAN, 0.0, 5.0], [0.0, 0.0, -1.0]),
@@ -232,13 +236,13 @@ fn invalid_rays_and_a_zero_maximum_have_no_hits() {
         Ray::with_interval([0.3, 0.1, 5.0], [0.0, 0.0, -1.0], 3.0, 2.0),
         Ray::with_interval([0.3, 0.1, 5.0], [0.0, 0.0, -1.0], f32::NAN, 2.0),
     ] {
-        assert_eq!(field.hit_count(&bad), 0, "{bad:?}");
-        assert!(field.all_hits(&bad, usize::MAX).is_empty(), "{bad:?}");
+        assert_eq!(field.view().hit_count(&bad), 0, "{bad:?}");
+        assert!(field.view().all_hits(&bad, usize::MAX).is_empty(), "{bad:?}");
     }
     // A segment that ends between the faces holds the first only; one that starts there, the second.
-    assert_eq!(field.hit_count(&Ray::with_interval([0.3, 0.1, 5.0], [0.0, 0.0, -1.0], 0.0, 5.0)), 1);
-    let later = field.all_hits(&Ray::with_interval([0.3, 0.1, 5.0], [0.0, 0.0, -1.0], 5.0, f32::INFINITY), 9);
+    assert_eq!(field.view().hit_count(&Ray::with_interval([0.3, 0.1, 5.0], [0.0, 0.0, -1.0], 0.0, 5.0)), 1);
+    let later = field.view().all_hits(&Ray::with_interval([0.3, 0.1, 5.0], [0.0, 0.0, -1.0], 5.0, f32::INFINITY), 9);
     assert_eq!(later.iter().map(|h| h.t).collect::<Vec<_>>(), [6.0]);
-    let batch = field.all_hits_batch(&[], 3);
+    let batch = field.view().all_hits_batch(&[], 3);
     assert_eq!((batch.offsets.as_slice(), batch.len()), (&[0u64][..], 0));
 }

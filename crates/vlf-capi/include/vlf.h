@@ -726,7 +726,7 @@ VlfStatus vlf_bounding_sphere(const struct VlfField *field, double *center, doub
 /**
  * Traces `ray` for every hit on `[tmin, tmax]`: writes the `capacity` closest of them (all of
  * them if there are fewer) to `hits[0..*count]`, in order of `t` then triangle id, each triangle
- * once, and their number to `*count`. The same hits, bit for bit, as the Rust `Field::all_hits`
+ * once, and their number to `*count`. The same hits, bit for bit, as the Rust `FieldView::all_hits`
  * with `max_hits = capacity` (and as testing every triangle of the field). An invalid ray, or
  * `capacity = 0`, has none.
  *

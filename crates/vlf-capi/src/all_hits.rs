@@ -6,7 +6,7 @@ use vlf_runtime::Hit;
 
 /// Traces `ray` for every hit on `[tmin, tmax]`: writes the `capacity` closest of them (all of
 /// them if there are fewer) to `hits[0..*count]`, in order of `t` then triangle id, each triangle
-/// once, and their number to `*count`. The same hits, bit for bit, as the Rust `Field::all_hits`
+/// once, and their number to `*count`. The same hits, bit for bit, as the Rust `FieldView::all_hits`
 /// with `max_hits = capacity` (and as testing every triangle of the field). An invalid ray, or
 /// `capacity = 0`, has none.
 ///
@@ -37,7 +37,7 @@ pub unsafe extern "C" fn vlf_all_hits(
         check_disjoint(span(hits, capacity), span(count, 1), "arguments `hits` and `count`")?;
         // SAFETY: the caller's promises; they do not overlap (checked).
         let (hits, count) = unsafe { (slice_out(hits, capacity, "hits")?, out(count, "count")?) };
-        let found = field.all_hits(bytemuck::cast_ref(ray), capacity);
+        let found = field.view().all_hits(bytemuck::cast_ref(ray), capacity);
         for (o, h) in hits.iter_mut().zip(&found) {
             o.write(bytemuck::cast(*h));
         }
@@ -87,7 +87,7 @@ pub unsafe extern "C" fn vlf_all_hits_batch(
         let view = field.view();
         let mut scratch: Vec<Hit> = Vec::new();
         for (i, (ray, count)) in rays.iter().zip(counts).enumerate() {
-            view.all_hits(bytemuck::cast_ref(ray), max_hits, &mut scratch);
+            view.all_hits_into(bytemuck::cast_ref(ray), max_hits, &mut scratch);
             let slots = &mut hits[i * max_hits..(i + 1) * max_hits];
             for (o, h) in slots.iter_mut().zip(&scratch) {
                 o.write(bytemuck::cast(*h));
@@ -113,7 +113,7 @@ pub unsafe extern "C" fn vlf_hit_count(field: *const VlfField, ray: *const VlfRa
     call("vlf_hit_count", || {
         // SAFETY: the caller's promises, argument by argument.
         let (field, ray, count) = unsafe { (field_arg(field)?, arg(ray, "ray")?, out(count, "count")?) };
-        count.write(field.hit_count(bytemuck::cast_ref(ray)));
+        count.write(field.view().hit_count(bytemuck::cast_ref(ray)));
         Ok(())
     })
 }
@@ -147,7 +147,7 @@ pub unsafe extern "C" fn vlf_hit_counts(
         let view = field.view();
         let mut scratch: Vec<Hit> = Vec::new();
         for (ray, count) in rays.iter().zip(counts) {
-            count.write(view.hit_count(bytemuck::cast_ref(ray), &mut scratch));
+            count.write(view.hit_count_into(bytemuck::cast_ref(ray), &mut scratch));
         }
         Ok(())
     })

@@ -305,7 +305,7 @@ fn c_all_hits_agree_with_the_rust_api() {
     let bytes = std::fs::read(&out_path).expect("read the C program's hits");
     let (mut at, mut several) = (0, 0);
     for (i, ray) in rays.iter().enumerate() {
-        let want = field.all_hits(ray, usize::MAX);
+        let want = field.view().all_hits(ray, usize::MAX);
         let count = u32::from_le_bytes(bytes[at..at + 4].try_into().unwrap()) as usize;
         at += 4;
         let got = hits_of(&bytes[at..at + 16 * count]);

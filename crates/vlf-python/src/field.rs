@@ -321,7 +321,8 @@ impl Field {
         let args = RayArgs::extract(origins, directions, tmin, tmax)?;
         let max = max_hits.unwrap_or(usize::MAX);
         let (splits, columns) = self.run(py, &args, threads, |field, rays, parallel| {
-            let lists = if parallel { field.par_all_hits_batch(rays, max) } else { field.all_hits_batch(rays, max) };
+            let view = field.view();
+            let lists = if parallel { view.par_all_hits_batch(rays, max) } else { view.all_hits_batch(rays, max) };
             let splits: Vec<i64> = lists.offsets.iter().map(|&o| o as i64).collect();
             (splits, Columns::new(field, &lists.hits, parallel))
         })?;
@@ -345,9 +346,9 @@ impl Field {
         let counts = self.run(py, &args, threads, |field, rays, parallel| {
             let mut out = vec![0u32; rays.len()];
             if parallel {
-                field.par_hit_counts(rays, &mut out);
+                field.view().par_hit_counts(rays, &mut out);
             } else {
-                field.hit_counts(rays, &mut out);
+                field.view().hit_counts(rays, &mut out);
             }
             out.into_iter().map(i64::from).collect::<Vec<i64>>()
         })?;

@@ -17,7 +17,8 @@
 //! Order: by `t`, then by triangle id. (The closest-hit query keeps the *last* of several hits at
 //! exactly the same `t`, in walk order; here the first of a tie is the smaller id.)
 
-use crate::{Field, FieldView};
+// The view from its own module, not the crate root: `lib.rs` uses this module.
+use crate::query::FieldView;
 use vlf_format::TriangleRecord;
 use vlf_geom::{Hit, Ray, TriRay, Triangles};
 
@@ -66,7 +67,8 @@ impl HitLists {
         self.len() == 0
     }
 
-    /// Appends `other`'s rays after these.
+    /// Appends `other`'s rays after these (the parallel batch stitches its parts).
+    #[cfg(feature = "rayon")]
     fn extend(&mut self, other: HitLists) {
         let base = self.hits.len() as u64;
         if self.offsets.is_empty() {
@@ -107,7 +109,7 @@ impl FieldView<'_> {
     /// invalid ray or `max_hits = 0`.
     ///
     /// Allocates only to grow `hits`: reuse one vector for many rays.
-    pub fn all_hits(&self, ray: &Ray, max_hits: usize, hits: &mut Vec<Hit>) {
+    pub fn all_hits_into(&self, ray: &Ray, max_hits: usize, hits: &mut Vec<Hit>) {
         hits.clear();
         if max_hits == 0 || !ray.is_valid() {
             return;
@@ -141,61 +143,58 @@ impl FieldView<'_> {
         });
     }
 
-    /// The number of triangles `ray` hits on `[tmin, tmax]` (0 for an invalid ray): the length of
-    /// [`Self::all_hits`] without a maximum. `scratch` holds the hits while they are counted;
-    /// reuse one vector for many rays.
-    pub fn hit_count(&self, ray: &Ray, scratch: &mut Vec<Hit>) -> u32 {
-        self.all_hits(ray, usize::MAX, scratch);
-        // A field holds fewer than 2³² triangles, each counted once.
-        scratch.len() as u32
-    }
-}
-
-impl Field {
     /// The `max_hits` closest hits of `ray` on `[tmin, tmax]`, in order of `t` then triangle id,
-    /// each triangle once (`usize::MAX` for all of them): [`FieldView::all_hits`], into a new
+    /// each triangle once (`usize::MAX` for all of them): [`Self::all_hits_into`], into a new
     /// vector. The same hits, bit for bit, as testing every triangle with the watertight kernel.
     pub fn all_hits(&self, ray: &Ray, max_hits: usize) -> Vec<Hit> {
         let mut hits = Vec::new();
-        self.view().all_hits(ray, max_hits, &mut hits);
+        self.all_hits_into(ray, max_hits, &mut hits);
         hits
     }
 
     /// The number of triangles `ray` hits on `[tmin, tmax]`, each counted once however many of
-    /// the field's leaves hold it (0 for an invalid ray). Allocates a vector for the hits while
-    /// counting; [`FieldView::hit_count`] reuses one.
+    /// the field's leaves hold it (0 for an invalid ray): the length of [`Self::all_hits`]
+    /// without a maximum. Allocates a vector for the hits while counting;
+    /// [`Self::hit_count_into`] reuses one.
     pub fn hit_count(&self, ray: &Ray) -> u32 {
-        self.view().hit_count(ray, &mut Vec::new())
+        self.hit_count_into(ray, &mut Vec::new())
     }
 
-    /// [`Field::all_hits`] of every ray of a batch on the calling thread, at most `max_hits` each.
+    /// [`Self::hit_count`], with `scratch` holding the hits while they are counted: reuse one
+    /// vector for many rays.
+    pub fn hit_count_into(&self, ray: &Ray, scratch: &mut Vec<Hit>) -> u32 {
+        self.all_hits_into(ray, usize::MAX, scratch);
+        // A field holds fewer than 2³² triangles, each counted once.
+        scratch.len() as u32
+    }
+
+    /// [`Self::all_hits`] of every ray of a batch on the calling thread, at most `max_hits` each.
     pub fn all_hits_batch(&self, rays: &[Ray], max_hits: usize) -> HitLists {
-        let view = self.view();
+        let view = self;
         let mut out = HitLists { offsets: Vec::with_capacity(rays.len() + 1), hits: Vec::new() };
         out.offsets.push(0);
         let mut scratch = Vec::new();
         for ray in rays {
-            view.all_hits(ray, max_hits, &mut scratch);
+            view.all_hits_into(ray, max_hits, &mut scratch);
             out.hits.extend_from_slice(&scratch);
             out.offsets.push(out.hits.len() as u64);
         }
         out
     }
 
-    /// Hit counts of a batch on the calling thread: `out[i]` is [`Field::hit_count`] of `rays[i]`.
+    /// Hit counts of a batch on the calling thread: `out[i]` is [`Self::hit_count`] of `rays[i]`.
     ///
     /// # Panics
     /// If the slices differ in length.
     pub fn hit_counts(&self, rays: &[Ray], out: &mut [u32]) {
         assert_eq!(rays.len(), out.len(), "one output per ray");
-        let view = self.view();
         let mut scratch = Vec::new();
         for (r, o) in rays.iter().zip(out) {
-            *o = view.hit_count(r, &mut scratch);
+            *o = self.hit_count_into(r, &mut scratch);
         }
     }
 
-    /// [`Field::all_hits_batch`] on all cores (rayon's global pool, or the pool installed around
+    /// [`Self::all_hits_batch`] on all cores (rayon's global pool, or the pool installed around
     /// the call). The same lists, in the same order.
     #[cfg(feature = "rayon")]
     pub fn par_all_hits_batch(&self, rays: &[Ray], max_hits: usize) -> HitLists {
@@ -210,7 +209,7 @@ impl Field {
         out
     }
 
-    /// [`Field::hit_counts`] on all cores. The same counts, in the same order.
+    /// [`Self::hit_counts`] on all cores. The same counts, in the same order.
     ///
     /// # Panics
     /// If the slices differ in length.
@@ -231,6 +230,7 @@ mod tests {
     }
 
     #[test]
+    #[cfg(feature = "rayon")]
     fn lists_stitch_and_index_by_ray() {
         let mut a = HitLists { offsets: vec![0, 1, 1], hits: vec![hit(1.0, 3)] };
         a.extend(HitLists { offsets: vec![0, 2], hits: vec![hit(0.5, 1), hit(2.0, 0)] });

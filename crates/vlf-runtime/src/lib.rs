@@ -38,10 +38,10 @@
 //! - **Queries allocate nothing** and take `&self`: [`Field`] is `Send + Sync`; share one across
 //!   threads. With the `rayon` feature, `par_closest_hits` and `par_any_hits` trace batches on
 //!   all cores.
-//! - **Every hit along a ray** ([`Field::all_hits`], each triangle once, in order of `t`, with a
-//!   per-ray maximum) and **hit counts** ([`Field::hit_count`]) walk the same leaves with the same
-//!   kernel: the same hits, bit for bit, as testing every triangle. They allocate only the list
-//!   they return (or grow the one [`FieldView::all_hits`] is given).
+//! - **Every hit along a ray** ([`FieldView::all_hits`], each triangle once, in order of `t`, with
+//!   a per-ray maximum) and **hit counts** ([`FieldView::hit_count`]), on `field.view()`, walk the
+//!   same leaves with the same kernel: the same hits, bit for bit, as testing every triangle. They
+//!   allocate only the list they return (or grow the one [`FieldView::all_hits_into`] is given).
 //! - **Invalid rays miss**: a ray with a non-finite or zero direction, a non-finite origin, a NaN
 //!   bound or `tmin > tmax` has no hit (see [`Ray::is_valid`]).
 //!
