@@ -140,7 +140,7 @@ fn on_plane(ray: &Ray, t: f64, tri: &[[f32; 3]; 3], origin: [f64; 3]) -> bool {
 /// Whether the hit on triangle `prim` at `t` lies within float precision of that triangle's
 /// edges: within 16 f32 ulps of the problem's magnitude (origin, hit point and vertices), where
 /// an f32 and an f64 intersector may legitimately disagree.
-fn grazes(ray: &Ray, t: f64, prim: u32, tris: &[[[f32; 3]; 3]], origin: [f64; 3]) -> bool {
+pub fn grazes(ray: &Ray, t: f64, prim: u32, tris: &[[[f32; 3]; 3]], origin: [f64; 3]) -> bool {
     let tri = &tris[prim as usize];
     let p = local_at(ray, t, origin);
     edge_distance(p, tri) <= 16.0 * f32::EPSILON as f64 * magnitude(ray, p, tri, origin)

@@ -774,6 +774,87 @@ VlfStatus vlf_input_hash(const struct VlfField *field, uint8_t *hash);
 VlfStatus vlf_bounding_sphere(const struct VlfField *field, double *center, double *radius);
 
 /**
+ * Traces `ray` for every hit on `[tmin, tmax]`: writes the `capacity` closest of them (all of
+ * them if there are fewer) to `hits[0..*count]`, in order of `t` then triangle id, each triangle
+ * once, and their number to `*count`. The same hits, bit for bit, as the Rust `FieldView::all_hits`
+ * with `max_hits = capacity` (and as testing every triangle of the field). An invalid ray, or
+ * `capacity = 0`, has none.
+ *
+ * The search stops as soon as the `capacity` closest hits are known, so a small capacity is
+ * cheaper than a large one. To learn how many hits there are in all, use `vlf_hit_count`.
+ * Allocates a little scratch memory per call. Safe to call from many threads on the same field.
+ *
+ * `hits` may be NULL when `capacity` is 0.
+ *
+ * Returns `VLF_OK` (hits or none), `VLF_ERR_NULL_ARGUMENT`, or `VLF_ERR_INVALID_ARGUMENT`
+ * (misaligned pointers, `capacity` too large for memory); on an error nothing is written.
+ *
+ * # Safety
+ * `field` must be NULL or an open handle; `ray` NULL or a valid ray; `hits` NULL or room for
+ * `capacity` hits; `count` NULL or writable; `hits` and `count` must not overlap.
+ */
+VlfStatus vlf_all_hits(const struct VlfField *field,
+                       const struct VlfRay *ray,
+                       struct VlfHit *hits,
+                       size_t capacity,
+                       size_t *count);
+
+/**
+ * Traces `n` rays for every hit, at most `max_hits` each: ray `i`'s hits go to
+ * `hits[i * max_hits ..]` (the first `counts[i]` of those `max_hits` slots; the rest are left as
+ * they were), in order of `t` then triangle id, as `vlf_all_hits` with `capacity = max_hits`
+ * would write them. Runs on the calling thread; to use several cores, call it from several
+ * threads on disjoint parts of the arrays.
+ *
+ * `rays`, `hits` and `counts` may be NULL when they would hold nothing, and must not overlap.
+ *
+ * Returns `VLF_OK`, `VLF_ERR_NULL_ARGUMENT`, or `VLF_ERR_INVALID_ARGUMENT` (misaligned or
+ * overlapping arrays, or `n · max_hits` too large); on an error nothing is written.
+ *
+ * # Safety
+ * `field` must be NULL or an open handle; `rays` must point to `n` rays, `hits` to room for
+ * `n · max_hits` hits and `counts` to room for `n` counts (or be NULL).
+ */
+VlfStatus vlf_all_hits_batch(const struct VlfField *field,
+                             const struct VlfRay *rays,
+                             size_t n,
+                             size_t max_hits,
+                             struct VlfHit *hits,
+                             size_t *counts);
+
+/**
+ * The number of triangles `ray` hits on `[tmin, tmax]`, in `*count`: each triangle counted once,
+ * however many of the field's leaves hold it (0 for an invalid ray). The number of hits
+ * `vlf_all_hits` finds with an unlimited capacity; the parity of a count from a point tells
+ * inside from outside of a closed mesh. Allocates a little scratch memory per call.
+ *
+ * Returns `VLF_OK`, `VLF_ERR_NULL_ARGUMENT`, or `VLF_ERR_INVALID_ARGUMENT` (a misaligned
+ * pointer).
+ *
+ * # Safety
+ * `field` must be NULL or an open handle; `ray` NULL or a valid ray; `count` NULL or writable.
+ */
+VlfStatus vlf_hit_count(const struct VlfField *field, const struct VlfRay *ray, uint32_t *count);
+
+/**
+ * Counts the hits of `n` rays: `counts[i]` receives what `vlf_hit_count` gives for `rays[i]`.
+ * Runs on the calling thread.
+ *
+ * `rays` and `counts` may be NULL when `n` is 0, and must not overlap.
+ *
+ * Returns `VLF_OK`, `VLF_ERR_NULL_ARGUMENT`, or `VLF_ERR_INVALID_ARGUMENT` (misaligned or
+ * overlapping arrays, or `n` too large); on an error nothing is written.
+ *
+ * # Safety
+ * `field` must be NULL or an open handle; `rays` must point to `n` rays and `counts` to room for
+ * `n` counts (or be NULL).
+ */
+VlfStatus vlf_hit_counts(const struct VlfField *field,
+                         const struct VlfRay *rays,
+                         size_t n,
+                         uint32_t *counts);
+
+/**
  * Creates an empty scene in `*out`.
  *
  * Returns `VLF_OK`, `VLF_ERR_NULL_ARGUMENT` or `VLF_ERR_INVALID_ARGUMENT` (a misaligned `out`).

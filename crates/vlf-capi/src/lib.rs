@@ -44,12 +44,14 @@
 
 #![deny(missing_docs)]
 
+mod all_hits;
 mod boundary;
 mod dynamic;
 mod info;
 mod scene;
 mod types;
 
+pub use all_hits::*;
 use boundary::*;
 pub use dynamic::*;
 pub use info::*;

@@ -279,6 +279,47 @@ fn c_api_checks_pass() {
     assert!(stdout.contains(" passed, 0 failed"), "{stdout}");
 }
 
+/// The all-hits and hit-count calls from C (`tests/c/all_hits_test.c`, linked with `libvlf.a`):
+/// every ray's full list of hits, as C wrote it, equals the Rust API's bit for bit; the C program
+/// checks the counts, the capped calls and the batch against it.
+#[test]
+fn c_all_hits_agree_with_the_rust_api() {
+    let lib = library_dir();
+    let work = tempfile::tempdir_in(env!("CARGO_TARGET_TMPDIR")).expect("temp dir");
+    let w = work.path();
+    let field_path = bake_bunny(w);
+    let field = Field::open(&field_path).expect("open");
+    let rays = ray_mix(&field);
+    let rays_path = w.join("rays.bin");
+    std::fs::write(&rays_path, bytemuck::cast_slice::<Ray, u8>(&rays)).expect("write rays");
+    let exe = w.join("all_hits_test");
+    let archive = lib.join("libvlf.a");
+    let mut args = vec![archive.to_str().expect("UTF-8 path")];
+    args.extend(STATIC_LIBS);
+    compile("c11", &[&crate_dir().join("tests/c/all_hits_test.c")], &args, &exe);
+    let out_path = w.join("all_hits.bin");
+    let out = run(Command::new(&exe).arg(&field_path).arg(&rays_path).arg("3").arg(&out_path));
+    let stdout = text(&out.stdout);
+    println!("{stdout}");
+    assert!(stdout.contains(" passed, 0 failed"), "{stdout}{}", text(&out.stderr));
+    let bytes = std::fs::read(&out_path).expect("read the C program's hits");
+    let (mut at, mut several) = (0, 0);
+    for (i, ray) in rays.iter().enumerate() {
+        let want = field.view().all_hits(ray, usize::MAX);
+        let count = u32::from_le_bytes(bytes[at..at + 4].try_into().unwrap()) as usize;
+        at += 4;
+        let got = hits_of(&bytes[at..at + 16 * count]);
+        at += 16 * count;
+        assert!(
+            bytemuck::cast_slice::<Hit, u8>(&got) == bytemuck::cast_slice::<Hit, u8>(&want),
+            "ray {i} {ray:?}: C {got:?}, Rust {want:?}"
+        );
+        several += (count > 1) as usize;
+    }
+    assert_eq!(at, bytes.len(), "nothing after the last ray");
+    assert!(several > rays.len() / 10, "only {several} rays with several hits");
+}
+
 /// The header also serves C++ (`extern "C"`, the `VlfStatus` enum with a fixed underlying type):
 /// a translation unit that includes it and calls the API compiles cleanly as C++11 and C++17.
 #[test]

@@ -5,6 +5,7 @@
 //!
 //! This is the plain scalar kernel, the reference twin of any faster one: a faster kernel must give
 //! the same answer as a sequence of [`TriRay::closest_in`] calls over the same ids in the same order.
+//! [`TriRay::hits_in`] hands every hit to the caller, for the queries that want them all.
 
 use crate::ray::{Counter, Hit};
 use crate::triangle::TriRay;
@@ -90,6 +91,27 @@ impl TriRay {
         }
         None
     }
+
+    /// Tests the triangles `ids` of `tris` in order and hands every hit on `[tmin, *tmax]` to
+    /// `found`, which may shorten `*tmax` (the all-hits queries do, once they hold as many hits as
+    /// were asked for). Ids `tris` does not hold are skipped. Counts one test per triangle tested.
+    #[inline(always)]
+    pub fn hits_in<T: Triangles + ?Sized, C: Counter>(
+        &self,
+        tris: &T,
+        ids: impl IntoIterator<Item = u32>,
+        tmax: &mut f32,
+        counter: &mut C,
+        mut found: impl FnMut(Hit, &mut f32),
+    ) {
+        for id in ids {
+            let Some([a, b, c]) = tris.vertices(id) else { continue };
+            counter.test();
+            if let Some(h) = self.intersect(a, b, c, *tmax) {
+                found(Hit { t: h.t, prim: id, u: h.u, v: h.v }, tmax);
+            }
+        }
+    }
 }
 
 #[cfg(test)]
@@ -127,5 +149,24 @@ mod tests {
         assert_eq!(tr.any_in(&TRIS[..], [2, 0, 1], f32::INFINITY, &mut work).unwrap().prim, 0);
         assert_eq!(work.triangle_tests, 2);
         assert_eq!(tr.any_in(&TRIS[..], [0, 1], 0.5, &mut ()), None);
+    }
+
+    #[test]
+    fn hits_in_reports_every_hit_within_a_shrinking_tmax() {
+        let ray = Ray::new([0.0, 0.0, 0.0], [0.0, 0.0, 1.0]);
+        let tr = TriRay::new(&ray);
+        let mut work = TraceStats::default();
+        let mut seen = Vec::new();
+        let mut tmax = f32::INFINITY;
+        tr.hits_in(&TRIS[..], [0, 7, 2, 1], &mut tmax, &mut work, |h, _| seen.push((h.prim, h.t)));
+        assert_eq!(seen, [(0, 2.0), (1, 1.0)]);
+        assert_eq!(work.triangle_tests, 3);
+        // The callback shortens the interval: triangle 0 (t = 2) is then out of it.
+        let mut ids = Vec::new();
+        tr.hits_in(&TRIS[..], [1, 0], &mut tmax, &mut (), |h, tmax| {
+            ids.push(h.prim);
+            *tmax = h.t;
+        });
+        assert_eq!((ids, tmax), (vec![1], 1.0));
     }
 }

@@ -67,6 +67,27 @@ impl<'a> BruteForce<'a> {
         counter.ray();
         TriRay::relative(ray, self.origin).any_in(self.triangles, self.ids(), ray.tmax, counter)
     }
+
+    /// The first `max_hits` of every hit on `[tmin, tmax]`, in order of `t` then triangle id
+    /// (`usize::MAX` for all): the reference of the runtime's all-hits and hit-count queries.
+    /// Nothing for an invalid ray.
+    pub fn all_hits_with(&self, ray: &Ray, max_hits: usize, counter: &mut impl Counter) -> Vec<Hit> {
+        if !ray.is_valid() {
+            return Vec::new();
+        }
+        counter.ray();
+        let mut hits = Vec::new();
+        let mut tmax = ray.tmax;
+        TriRay::relative(ray, self.origin).hits_in(self.triangles, self.ids(), &mut tmax, counter, |h, _| hits.push(h));
+        hits.sort_by(|a, b| a.t.total_cmp(&b.t).then(a.prim.cmp(&b.prim)));
+        hits.truncate(max_hits);
+        hits
+    }
+
+    /// [`Self::all_hits_with`], counting nothing.
+    pub fn all_hits(&self, ray: &Ray, max_hits: usize) -> Vec<Hit> {
+        self.all_hits_with(ray, max_hits, &mut ())
+    }
 }
 
 impl Intersector for BruteForce<'_> {

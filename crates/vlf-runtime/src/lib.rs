@@ -38,6 +38,10 @@
 //! - **Queries allocate nothing** and take `&self`: [`Field`] is `Send + Sync`; share one across
 //!   threads. With the `rayon` feature, `par_closest_hits` and `par_any_hits` trace batches on
 //!   all cores.
+//! - **Every hit along a ray** ([`FieldView::all_hits`], each triangle once, in order of `t`, with
+//!   a per-ray maximum) and **hit counts** ([`FieldView::hit_count`]), on `field.view()`, walk the
+//!   same leaves with the same kernel: the same hits, bit for bit, as testing every triangle. They
+//!   allocate only the list they return (or grow the one [`FieldView::all_hits_into`] is given).
 //! - **Invalid rays miss**: a ray with a non-finite or zero direction, a non-finite origin, a NaN
 //!   bound or `tmin > tmax` has no hit (see [`Ray::is_valid`]).
 //!
@@ -57,6 +61,7 @@
 
 #![deny(missing_docs)]
 
+mod all_hits;
 mod filter;
 mod prefetch;
 mod query;
@@ -68,6 +73,7 @@ use std::path::{Path, PathBuf};
 use vlf_format::pack::Unpacked;
 use vlf_format::{AlignedBytes, NO_INDEX};
 
+pub use all_hits::HitLists;
 pub use query::FieldView;
 use scene::SceneSections;
 pub use scene::{CameraProjection, LightKind, Material, SceneCamera, SceneLight};

@@ -381,6 +381,22 @@ impl<'a> FieldView<'a> {
         }
     }
 
+    /// The walk of the all-hits query (`crate::all_hits`): calls `visit(passing, exit_t)` for each
+    /// leaf along the ray, front to back, until it returns `true`; `passing(t_far)` gives the ids
+    /// of the leaf's refs whose boxes meet the ray's box over `[enter_t, t_far]`, as
+    /// [`Self::closest_hit`] tests them.
+    pub(crate) fn for_each_leaf_filtered(
+        &self,
+        ray: &Ray,
+        mut visit: impl FnMut(&dyn Fn(f64) -> Passing<'a>, f64) -> bool,
+    ) {
+        if let Some(setup) = self.setup(ray, self.center) {
+            self.walk(&setup, &mut (), |leaf, _| {
+                if visit(&|t_far| leaf.passing(t_far), leaf.exit_t) { Visit::Done } else { Visit::Continue }
+            });
+        }
+    }
+
     /// Steps 3 to 5: visits the leaves along the ray front to back, handing each to `visit` until
     /// it says `Done`.
     #[inline(always)]
