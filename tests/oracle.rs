@@ -49,6 +49,56 @@ fn long_thin_slivers() {
 }
 
 #[test]
+fn scenes_far_from_the_origin() {
+    // Issue 11: the paper's random triangles, 0.1 across, centred at 1e5, 1e6 and 1e7. They are
+    // imported in f64 and stored relative to the scene's centre, so none collapses; rays (f32 in
+    // the world, as callers give them) are checked against the brute force over the same stored
+    // triangles.
+    for (i, centre) in [1e5, 3e6, 1e7].into_iter().enumerate() {
+        let local = generate::random_cube(1000, 0.05, 40 + i as u64);
+        let far: Vec<[[f64; 3]; 3]> = local
+            .iter()
+            .map(|t| t.map(|v| [v[0] as f64 + centre, v[1] as f64 - centre, v[2] as f64 + 0.5 * centre]))
+            .collect();
+        let scene = Scene::from_triangles_f64("far", &far).expect("scene");
+        assert_eq!(scene.len(), 1000, "centre {centre}: no triangle is lost");
+        assert_eq!((scene.report.dropped_degenerate, scene.report.dropped_precision), (0, 0));
+        let kept = scene.vertices();
+        for (k, &(l, n, d)) in [(19, 16, depth(4, 8)), (33, 64, depth(4, 8))].iter().enumerate() {
+            let (_dir, field) = bake(&scene, l, n, d);
+            let o = field.origin();
+            assert!((o[0] - centre).abs() < 2.0 && (o[1] + centre).abs() < 2.0, "centre {centre}: origin {o:?}");
+            check_field(&format!("far, centre {centre:e} (l={l}, n={n})"), &field, &kept, 6_000, 50 + k as u64);
+        }
+    }
+}
+
+#[test]
+fn duplicated_and_coincident_triangles() {
+    // Issue 11: exact duplicates and the same corners in another order (merged at import, their
+    // provenance kept), and coincident triangles that are not duplicates (in the same plane and
+    // overlapping: shrunk towards the centroid, or slid along an edge), which the field must
+    // answer like the brute force: the lowest id wins a tie at equal t.
+    let base = generate::random_cube(300, 0.1, 61);
+    let mut tris = Vec::new();
+    for (i, t) in base.iter().enumerate() {
+        tris.push(*t);
+        let c = [0, 1, 2].map(|k| (t[0][k] + t[1][k] + t[2][k]) / 3.0);
+        let edge = [0, 1, 2].map(|k| t[1][k] - t[0][k]);
+        tris.push(match i % 4 {
+            0 => *t,                                                       // an exact duplicate
+            1 => [t[2], t[0], t[1]],                                       // the same corners
+            2 => t.map(|v| [0, 1, 2].map(|k| c[k] + 0.6 * (v[k] - c[k]))), // shrunk, same plane
+            _ => t.map(|v| [0, 1, 2].map(|k| v[k] + 0.3 * edge[k])),       // slid along an edge
+        });
+    }
+    let scene = Scene::from_triangles("coincident", &tris).expect("scene");
+    assert_eq!(scene.report.dropped_duplicates, 150, "every copy of the same corners is merged");
+    assert_eq!(scene.len(), 450);
+    run("coincident", &tris, &[(9, 8, depth(4, 8)), (33, 32, depth(2, 12)), (19, 64, depth(1, 0))], 8_000);
+}
+
+#[test]
 fn degenerate_triangles_are_dropped_and_the_rest_is_exact() {
     let tris = generate::with_degenerates(600, 5);
     let scene = Scene::from_triangles("degenerate", &tris).unwrap();
