@@ -20,10 +20,10 @@ pub const MARGIN_FRACTION: f64 = 1.0 / (1u64 << 20) as f64;
 /// The default size budget for automatic parameters: 4 GiB.
 pub const DEFAULT_MAX_BYTES: u64 = 4 << 30;
 /// The default per-triangle allowance of automatic parameters: 1 KiB per triangle, so a field
-/// stays proportionate to its scene. The format 2.0 sweep (`docs/benchmarks/parameters.md`,
-/// 100K triangles) measured 764 B per triangle (19 directions × 64²) within 10% of the fastest
-/// field on outside and inside rays and as fast on incoherent ones, while fields of 2–4 KiB per
-/// triangle were no faster: their extra bytes cost cache misses that eat what the finer tiles save.
+/// stays proportionate to its scene. In the format 2.0 sweep (`docs/benchmarks/parameters.md`)
+/// larger fields were not clearly faster at 100K triangles, and at 1M faster on primary rays only
+/// (up to 2× at 4 KiB per triangle), never on incoherent ones; 1 KiB is also the size the
+/// project aims at for 1M-triangle scenes. `--max-bytes-per-triangle` buys the rest.
 pub const DEFAULT_MAX_BYTES_PER_TRIANGLE: u64 = 1 << 10;
 /// The smallest budget automatic parameters get, whatever the triangle count, so that a mesh of a
 /// few triangles still bakes (its fixed sections alone exceed a per-triangle allowance).
@@ -34,11 +34,10 @@ pub const SPARSE_TILE_LOAD: f64 = 3.0;
 const SAMPLE_DIRECTIONS: usize = 8;
 
 /// The ladder of automatic (lattice N, tiles n) rungs, coarse to fine, from the format 2.0 sweep
-/// on random scenes of 100K triangles (`docs/benchmarks/parameters.md`): query time falls with the
-/// tiles up to 64² and not measurably beyond, and with the directions up to 19–33 (N = 3–4); past
-/// that (33 × 128², 51 directions, 256² tiles, depth 12) fields grow 1.5 to 4 times and are no
-/// faster or *slower*, their working set missing the caches. So the ladder refines tiles to 64² on
-/// 9 directions first, then adds directions, and ends where the sweep stopped finding speed.
+/// (`docs/benchmarks/parameters.md`): 32² tiles are slow everywhere and hardly smaller than 64²;
+/// at 64² tiles more directions shorten the walk; finer settings (33 × 128² and beyond) are over
+/// the default allowance at every scale measured. So the ladder refines tiles to 64² on 9
+/// directions first, then adds directions up to 33; explicit `--tiles`/`--directions` go further.
 pub const LADDER: [(u32, u32); 5] = [(2, 16), (2, 32), (2, 64), (3, 64), (4, 64)];
 
 pub use vlf_raster::{DEFAULT_LEAF_SIZE, DEFAULT_MAX_DEPTH, DepthPolicy};
