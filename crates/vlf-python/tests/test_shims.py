@@ -215,8 +215,8 @@ def test_open3d_shim_against_open3d(o3d):
 
 
 def test_shims_bake_tiny_meshes_with_the_default_options():
-    # 16 KiB per triangle cannot hold even the coarsest field of a mesh of one triangle: the shims
-    # give small meshes a budget of at least 4 MiB.
+    # A mesh of one triangle bakes with the library's defaults (at least 4 MiB for any mesh),
+    # through the shims and directly.
     v = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], dtype=np.float32)
     scene = vlf.open3d.RaycastingScene()
     scene.add_triangles(v, np.array([[0, 1, 2]], dtype=np.uint32))
@@ -225,8 +225,9 @@ def test_shims_bake_tiny_meshes_with_the_default_options():
     assert scene.field.bake_info["cache"] in ("miss", "hit")
     r = vlf.trimesh.RayMeshIntersector(Mesh(v, np.array([[0, 1, 2]])))
     assert r.intersects_first([[0.2, 0.2, 1]], [[0, 0, -1]]).tolist() == [0]
-    with pytest.raises(vlf.BakeError, match="budget"):
-        vlf.bake_arrays(v, [[0, 1, 2]], no_cache=True)
+    field = vlf.bake_arrays(v, [[0, 1, 2]], no_cache=True)
+    assert field.triangle_count == 1
+    assert field.parameters["max_bytes_per_triangle"] == 1024
 
 
 def test_trimesh_shim_notices_changes_to_a_trimesh_mesh():

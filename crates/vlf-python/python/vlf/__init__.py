@@ -367,13 +367,12 @@ def _options(options: dict) -> dict:
 
 
 def _shim_options(options: dict, triangles: int) -> dict:
-    """The shims' bake options: the cache by default, and, where no budget is given, at least
-    4 MiB for the whole field, so that a mesh of a few triangles (whose 16 KiB per triangle
-    could not hold even the coarsest field) bakes too."""
+    """The shims' bake options: the library's defaults (which give any mesh, however small, a
+    budget of at least 4 MiB), through the cache unless told otherwise. ``triangles`` is unused
+    and kept for the shims' calls."""
+    del triangles
     out = dict(options)
     out.setdefault("cache_dir", default_cache_dir())
-    if "max_bytes_per_triangle" not in out and out.get("directions") is None and out.get("tiles") is None:
-        out["max_bytes_per_triangle"] = max(16 << 10, -(-(4 << 20) // max(triangles, 1)))
     return out
 
 
