@@ -41,6 +41,27 @@ use vlf_runtime::Field;
 
 /// The environment variable naming the cache directory when `--cache-dir` is absent.
 pub const CACHE_DIR_ENV: &str = "VLF_CACHE_DIR";
+
+/// Which cache a bake uses, as every front end resolves it: none when `no_cache`; else `dir`,
+/// else `$VLF_CACHE_DIR` (ignored when empty). Gives the cache, or why none is used, naming the
+/// front end's own options (`no_cache_option`, `dir_option`: `--no-cache` and `--cache-dir` for
+/// the command line). A directory that cannot be opened is `Err` with the reason, for the front
+/// end to warn about; the bake then goes on without a cache.
+pub fn resolve(
+    dir: Option<PathBuf>,
+    no_cache: bool,
+    no_cache_option: &str,
+    dir_option: &str,
+) -> Result<Result<Cache, String>, String> {
+    if no_cache {
+        return Err(no_cache_option.to_owned());
+    }
+    let env = std::env::var_os(CACHE_DIR_ENV).filter(|v| !v.is_empty()).map(PathBuf::from);
+    match dir.or(env) {
+        None => Err(format!("no {dir_option} and no {CACHE_DIR_ENV}")),
+        Some(dir) => Ok(Cache::open(&dir).map_err(|e| format!("not using the cache: {e}"))),
+    }
+}
 /// The subdirectory of this cache layout.
 pub const LAYOUT: &str = "v1";
 

@@ -12,7 +12,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
-use vlf_bake::cache::{CACHE_DIR_ENV, Cache, Lookup, key_for_scene};
+use vlf_bake::cache::{Cache, Lookup, key_for_scene};
 use vlf_bake::job::{BakeJob, JobError, run_bake_job};
 use vlf_bake::{BakeConfig, DepthPolicy, ImportError, NoProgress, Prepared, Scene, choose};
 
@@ -49,15 +49,9 @@ fn options(
         max_bytes_per_triangle: max_bytes_per_triangle.unwrap_or(defaults.max_bytes_per_triangle),
     };
     config.validate().map_err(|e| value_error(e.to_string()))?;
-    // As the command line resolves `--cache-dir`, `--no-cache` and `VLF_CACHE_DIR`.
-    let env = std::env::var_os(CACHE_DIR_ENV).filter(|v| !v.is_empty()).map(PathBuf::from);
-    let (cache, cache_note) = match (no_cache, cache_dir.or(env)) {
-        (true, _) => (None, Some("no_cache=True".to_owned())),
-        (false, None) => (None, Some(format!("no cache_dir and no {CACHE_DIR_ENV}"))),
-        (false, Some(dir)) => match Cache::open(&dir) {
-            Ok(cache) => (Some(cache), None),
-            Err(e) => (None, Some(format!("not using the cache: {e}"))),
-        },
+    let (cache, cache_note) = match vlf_bake::cache::resolve(cache_dir, no_cache, "no_cache=True", "cache_dir") {
+        Ok(Ok(cache)) => (Some(cache), None),
+        Ok(Err(note)) | Err(note) => (None, Some(note)),
     };
     Ok(Options { config, cache, cache_note, threads: Threads::new(threads)? })
 }

@@ -18,8 +18,7 @@ pub mod trace;
 use crate::args::CacheChoice;
 use anyhow::Result;
 use std::io::Write;
-use std::path::PathBuf;
-use vlf_bake::cache::{CACHE_DIR_ENV, Cache};
+use vlf_bake::cache::Cache;
 
 /// Prints one line (or several joined by newlines) on standard output and flushes it, so that a
 /// closed pipe is reported here (and `main` treats it as success).
@@ -34,21 +33,14 @@ pub fn stdout_line(s: &str) -> Result<()> {
 /// cache directory that cannot be created is not an error (a cache only ever saves time): the bake
 /// goes on without it, with a warning unless `quiet`.
 pub fn resolve_cache(choice: &CacheChoice, quiet: bool) -> (Option<Cache>, Option<String>) {
-    let env = std::env::var_os(CACHE_DIR_ENV).filter(|v| !v.is_empty()).map(PathBuf::from);
-    if choice.no_cache {
-        return (None, Some("--no-cache".into()));
-    }
-    match choice.cache_dir.clone().or(env) {
-        None => (None, Some(format!("no --cache-dir and no {CACHE_DIR_ENV}"))),
-        Some(dir) => match Cache::open(&dir) {
-            Ok(cache) => (Some(cache), None),
-            Err(e) => {
-                let note = format!("not using the cache: {e}");
-                if !quiet {
-                    eprintln!("warning: {note}");
-                }
-                (None, Some(note))
+    match vlf_bake::cache::resolve(choice.cache_dir.clone(), choice.no_cache, "--no-cache", "--cache-dir") {
+        Ok(Ok(cache)) => (Some(cache), None),
+        Ok(Err(note)) => {
+            if !quiet {
+                eprintln!("warning: {note}");
             }
-        },
+            (None, Some(note))
+        }
+        Err(note) => (None, Some(note)),
     }
 }
