@@ -163,7 +163,6 @@ pub fn run_scene(spec: &SceneSpec, cfg: &PeersConfig) -> anyhow::Result<SceneRes
     all.extend(peers.iter().map(|b| b.as_ref()));
     let built = all
         .iter()
-        .filter(|c| c.name() != batch.name())
         .map(|c| Built {
             contestant: c.name().into(),
             params: c.describe(),
