@@ -1,10 +1,12 @@
 //! Queries allocate nothing: a counting global allocator sees zero allocations across a frame of
-//! closest-hit and any-hit queries (and `Field` is `Send + Sync`: queried from several threads).
+//! closest-hit and any-hit queries, single and batched in every interleaving mode (and `Field` is
+//! `Send + Sync`: queried from several threads).
 
 #![forbid(unsafe_code)]
 
 use vlf_bake::{DepthPolicy, Scene, generate};
 use vlf_geom::Camera;
+use vlf_runtime::Interleave;
 
 #[global_allocator]
 static GLOBAL: vlf_tests::CountingAllocator = vlf_tests::CountingAllocator;
@@ -17,12 +19,21 @@ fn queries_do_not_allocate() {
     let mut rays = Camera::outside(c, r, 1.0).primary_rays(64, 64);
     rays.extend(Camera::inside(c, r, 1.0).primary_rays(64, 64));
 
+    let mut closest = vec![None; rays.len()];
+    let mut records = vec![vlf_geom::Hit::MISS; rays.len()];
+    let mut any = vec![false; rays.len()];
     let before = vlf_tests::allocations_on_this_thread();
     let mut hits = 0u32;
     for ray in &rays {
         hits += field.closest_hit(ray).is_some() as u32;
         hits += field.any_hit(ray) as u32;
     }
+    for how in [Interleave::Always, Interleave::Never, Interleave::Auto] {
+        field.view().closest_hits_in(&rays, &mut closest, how);
+        field.view().any_hits_in(&rays, &mut any, how);
+    }
+    field.closest_hits(&rays, &mut records);
+    field.any_hits(&rays, &mut any);
     let after = vlf_tests::allocations_on_this_thread();
     assert!(hits > 1000, "the frame should hit the scene ({hits})");
     assert_eq!(after - before, 0, "queries allocated");

@@ -11,7 +11,7 @@ use vlf_bake::import::import_bytes;
 use vlf_bake::{Scene, SceneBuilder};
 use vlf_format::{CONTENT_HASH_RANGE, HEADER_SIZE, Header, MAX_SECTIONS, SectionEntry, TABLE_ENTRY_SIZE, codec};
 use vlf_geom::{Hit, Ray, TraceStats};
-use vlf_runtime::{Field, FieldView};
+use vlf_runtime::{Field, FieldView, Interleave};
 
 /// At most this many rays are decoded from the bytes after a field.
 const MAX_TAIL_RAYS: usize = 64;
@@ -141,6 +141,14 @@ pub fn exercise(field: &Field, tail: &[u8]) {
     for ((ray, hit), any) in rays.iter().zip(&hits).zip(&any) {
         assert_eq!(*hit, Hit::record(field.closest_hit(ray)), "batch and single closest hit differ for {ray:?}");
         assert_eq!(*any, field.any_hit(ray), "batch and single any hit differ for {ray:?}");
+    }
+    // The interleaved batch, which the calls above leave out on a field this small.
+    let mut closest = vec![None; rays.len()];
+    field.view().closest_hits_in(&rays, &mut closest, Interleave::Always);
+    field.view().any_hits_in(&rays, &mut any, Interleave::Always);
+    for ((ray, hit), any) in rays.iter().zip(&closest).zip(&any) {
+        assert_eq!(*hit, field.closest_hit(ray), "interleaved and single closest hit differ for {ray:?}");
+        assert_eq!(*any, field.any_hit(ray), "interleaved and single any hit differ for {ray:?}");
     }
     for id in [0, 1, field.triangle_count().saturating_sub(1), field.triangle_count(), u32::MAX] {
         let _ = field.provenance(id);

@@ -21,8 +21,8 @@ use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 use vlf_bake::generate::Rng;
 use vlf_bake::{BakeConfig, DepthPolicy, NoProgress, Scene};
-use vlf_geom::{BruteForce, Intersector, Ray};
-use vlf_runtime::Field;
+use vlf_geom::{BruteForce, Hit, Intersector, Ray};
+use vlf_runtime::{Field, Interleave};
 
 /// The workspace's `fixtures/` directory.
 pub fn fixtures() -> PathBuf {
@@ -157,6 +157,9 @@ pub struct Tally {
     pub kernel_mismatches: u64,
     /// f32 and f64 disagree, but the ray grazes an edge or vertex.
     pub ambiguous: u64,
+    /// A batch query (interleaved, in turn or automatic) differs from the single-ray query on
+    /// the same ray (`t`, `prim`, `u`, `v` bit for bit, or any-hit): counted by [`check_batches`].
+    pub batch_mismatches: u64,
     pub examples: Vec<String>,
 }
 
@@ -167,6 +170,7 @@ impl Tally {
         self.mismatches += o.mismatches;
         self.kernel_mismatches += o.kernel_mismatches;
         self.ambiguous += o.ambiguous;
+        self.batch_mismatches += o.batch_mismatches;
         self.examples.extend(o.examples.into_iter().take(5usize.saturating_sub(self.examples.len())));
     }
 }
@@ -238,11 +242,39 @@ pub fn compare(accel: &dyn Intersector, tris: &[[[f32; 3]; 3]], origin: [f64; 3]
 /// Asserts zero mismatches and reports the counts.
 pub fn assert_exact(label: &str, tally: &Tally) {
     println!(
-        "{label}: {} rays, {} hits, {} mismatches, {} kernel mismatches, {} ambiguous (grazing)",
-        tally.rays, tally.hits, tally.mismatches, tally.kernel_mismatches, tally.ambiguous
+        "{label}: {} rays, {} hits, {} mismatches, {} kernel mismatches, {} ambiguous (grazing), {} batch mismatches",
+        tally.rays, tally.hits, tally.mismatches, tally.kernel_mismatches, tally.ambiguous, tally.batch_mismatches
     );
     assert_eq!(tally.mismatches, 0, "{label}: field differs from brute force: {:#?}", tally.examples);
     assert_eq!(tally.kernel_mismatches, 0, "{label}: f32 kernel differs from the f64 oracle: {:#?}", tally.examples);
+    assert_eq!(tally.batch_mismatches, 0, "{label}: a batch query differs from the single ray: {:#?}", tally.examples);
+}
+
+/// Runs `rays` through the field's batch queries in every [`Interleave`] mode and counts, into
+/// `tally`, the rays on which one differs from the single-ray query (which [`compare`] holds to
+/// the brute force): the closest hit's `t`, `prim`, `u` and `v` bit for bit, and the any-hit
+/// answer.
+pub fn check_batches(field: &Field, rays: &[Ray], tally: &mut Tally) {
+    let view = field.view();
+    let key = |h: Option<Hit>| h.map(|h| (h.t.to_bits(), h.prim, h.u.to_bits(), h.v.to_bits()));
+    let single: Vec<_> = rays.iter().map(|r| (key(view.closest_hit(r)), view.any_hit(r))).collect();
+    for how in [Interleave::Always, Interleave::Never, Interleave::Auto] {
+        let mut closest = vec![None; rays.len()];
+        let mut any = vec![false; rays.len()];
+        view.closest_hits_in(rays, &mut closest, how);
+        view.any_hits_in(rays, &mut any, how);
+        for (i, ray) in rays.iter().enumerate() {
+            if (key(closest[i]), any[i]) != single[i] {
+                tally.batch_mismatches += 1;
+                if tally.examples.len() < 5 {
+                    tally.examples.push(format!(
+                        "ray {ray:?}: batch ({how:?}) {:?} any={}, single ray {:?}",
+                        closest[i], any[i], single[i]
+                    ));
+                }
+            }
+        }
+    }
 }
 
 /// Bakes `scene` with explicit parameters into a temporary directory and opens it.
@@ -374,7 +406,8 @@ pub fn check_field(label: &str, field: &Field, scene: &[[[f32; 3]; 3]], per_fami
     assert_eq!(tris, scene, "{label}: the field stores the scene's triangles");
     let mut total = Tally::default();
     for (family, rays) in ray_families(field, per_family, seed) {
-        let tally = compare(field, &tris, field.origin(), &rays);
+        let mut tally = compare(field, &tris, field.origin(), &rays);
+        check_batches(field, &rays, &mut tally);
         assert_exact(&format!("{label} / {family}"), &tally);
         total.add(tally);
     }

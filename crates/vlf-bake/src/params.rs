@@ -40,6 +40,16 @@ const SAMPLE_DIRECTIONS: usize = 8;
 /// directions first, then adds directions up to 33; explicit `--tiles`/`--directions` go further.
 pub const LADDER: [(u32, u32); 5] = [(2, 16), (2, 32), (2, 64), (3, 64), (4, 64)];
 
+/// Triangles per non-empty tile above which the automatic choice refines the ladder's tiles to
+/// [`DENSE_TILES`], if that fits the budget. Measured (`docs/benchmarks/parameters.md`): on the
+/// Stanford dragon (825 triangles per non-empty 64² tile) 19 × 128² tiles traced inside and
+/// incoherent rays 1.6–1.8× faster than 19 × 64² at the same size, and the 1M random scene of
+/// shrinking triangles (700) gained too; the 100K random scenes (96 and 154) did not.
+pub const DENSE_TILE_LOAD: f64 = 400.0;
+
+/// The tiles per side that dense tiles are refined to.
+pub const DENSE_TILES: u32 = 128;
+
 pub use vlf_raster::{DEFAULT_LEAF_SIZE, DEFAULT_MAX_DEPTH, DepthPolicy};
 
 /// What the user asks for. `None` means "choose for me".
@@ -284,6 +294,21 @@ pub fn choose<M: Measure>(scene: &M, config: &BakeConfig) -> Result<Choice, M::E
             break;
         }
     }
+    // Dense tiles: the leaves of a tile that holds hundreds of triangles are long lists, and a
+    // ray that reaches a surface tests them all. Automatic parameters refine such tiles to
+    // DENSE_TILES when that fits the budget too (docs/benchmarks/parameters.md).
+    if let (None, None, Some((p, _, load))) = (explicit_n, config.tiles, chosen) {
+        if load > DENSE_TILE_LOAD
+            && p.tiles < DENSE_TILES
+            && lower_bound_bytes(tris, p.lattice_n, DENSE_TILES) <= auto_budget
+        {
+            let finer = params_for(scene.radius(), p.lattice_n, DENSE_TILES, config.depth);
+            let (bytes, load) = estimate(scene, &finer)?;
+            if bytes <= auto_budget {
+                chosen = Some((finer, bytes, load));
+            }
+        }
+    }
     let Some((params, bytes, load)) = chosen else {
         let (ln, t) = rungs[0];
         return Err(ParamsError::NothingFits {
@@ -461,11 +486,36 @@ mod tests {
         assert_eq!(choice.estimated_bytes, Some(budget));
         assert_eq!(choice.params.margin, 2.0 * MARGIN_FRACTION);
         // The next rung was ruled out, by its lower bound before any estimate; none beyond it.
-        assert_eq!(model.sampled(), LADDER[..4]);
+        // Its tiles are dense, so the finer tiles were estimated too, and did not fit.
+        assert!(model.load(64) > DENSE_TILE_LOAD);
+        assert_eq!(model.sampled(), [&LADDER[..4], &[(LADDER[3].0, DENSE_TILES)]].concat());
         assert!(choice.reason.starts_with("chose 19 directions × 64² tiles: estimated "), "{}", choice.reason);
-        // A budget one byte smaller stops a rung earlier.
+        // A budget one byte smaller stops a rung earlier (whose dense tiles are then refined,
+        // which fits).
         let choice = choose(&Model::new(10_000_000), &automatic(budget - 1)).unwrap();
-        assert_eq!((choice.params.lattice_n, choice.params.tiles), LADDER[2]);
+        assert_eq!((choice.params.lattice_n, choice.params.tiles), (LADDER[2].0, DENSE_TILES));
+    }
+
+    #[test]
+    fn dense_tiles_are_refined_when_the_budget_allows() {
+        // 64² tiles of 2,000 triangles: dense. A budget that fits 33 × 128² gets it...
+        let model = Model::new(2_000 * 64 * 64);
+        assert!(model.load(64) > DENSE_TILE_LOAD);
+        let budget = model.estimate(LADDER[4].0, DENSE_TILES);
+        let choice = choose(&model, &automatic(budget)).unwrap();
+        assert_eq!((choice.params.lattice_n, choice.params.tiles), (LADDER[4].0, DENSE_TILES));
+        assert!(choice.reason.starts_with("chose 33 directions × 128² tiles"), "{}", choice.reason);
+        // ... one a byte smaller stays at the ladder's choice.
+        let choice = choose(&Model::new(2_000 * 64 * 64), &automatic(budget - 1)).unwrap();
+        assert_eq!((choice.params.lattice_n, choice.params.tiles), LADDER[4]);
+        // Tiles at the load threshold are not refined, whatever the budget.
+        let model = Model::new(DENSE_TILE_LOAD as u64 * 64 * 64);
+        let choice = choose(&model, &automatic(u64::MAX / 2)).unwrap();
+        assert_eq!((choice.params.lattice_n, choice.params.tiles), LADDER[4]);
+        assert!(!model.sampled().contains(&(LADDER[4].0, DENSE_TILES)));
+        // Explicit directions or tiles are never refined.
+        let config = BakeConfig { directions: Some(33), ..automatic(u64::MAX / 2) };
+        assert!(choose(&Model::new(2_000 * 64 * 64), &config).unwrap().params.tiles <= 4 * LADDER[4].0);
     }
 
     #[test]

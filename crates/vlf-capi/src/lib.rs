@@ -62,6 +62,10 @@ use types::VlfStatus::*;
 pub use types::*;
 use vlf_runtime::{Hit, OpenOptions};
 
+/// Rays per call of the batch query in `vlf_closest_hits` and `vlf_any_hits` (their answers pass
+/// through a stack buffer of this many).
+const ARRAY_CHUNK: usize = 256;
+
 /// The version of this library, e.g. `"0.1.0"`: a static NUL-terminated string.
 #[unsafe(no_mangle)]
 pub extern "C" fn vlf_version() -> *const c_char {
@@ -381,7 +385,8 @@ pub unsafe extern "C" fn vlf_any_hit_local(field: *const VlfField, ray: *const V
 }
 
 /// Traces `n` rays: `hits[i]` receives the closest hit of `rays[i]` (the miss record if none), as
-/// `vlf_closest_hit` would. Runs on the calling thread; to use several cores, call it from several
+/// `vlf_closest_hit` would, bit for bit. Incoherent rays are traced several at a time, interleaved
+/// so that their cache misses overlap (`Field::closest_hits`). Runs on the calling thread; to use several cores, call it from several
 /// threads on disjoint parts of the arrays.
 ///
 /// `rays` and `hits` may be NULL when `n` is 0, and must not overlap.
@@ -407,16 +412,19 @@ pub unsafe extern "C" fn vlf_closest_hits(
         check_disjoint(span(rays, n), span(hits, n), "arrays `rays` and `hits`")?;
         // SAFETY: the caller's promises on the arrays; they do not overlap (checked).
         let (rays, hits) = unsafe { (slice_arg(rays, n, "rays")?, slice_out(hits, n, "hits")?) };
-        let view = field.view();
-        for (ray, hit) in rays.iter().zip(hits) {
-            hit.write(bytemuck::cast(Hit::record(view.closest_hit(bytemuck::cast_ref(ray)))));
+        // Through the batch query (incoherent rays interleaved), a stack buffer at a time.
+        let mut buffer = [Hit::MISS; ARRAY_CHUNK];
+        for (rays, hits) in rays.chunks(ARRAY_CHUNK).zip(hits.chunks_mut(ARRAY_CHUNK)) {
+            let buffer = &mut buffer[..rays.len()];
+            field.closest_hits(bytemuck::cast_slice(rays), buffer);
+            write_all(hits, bytemuck::cast_slice(buffer));
         }
         Ok(())
     })
 }
 
 /// Traces `n` rays for any hit: `hits[i]` receives 1 if `rays[i]` hits something, 0 if not, as
-/// `vlf_any_hit` would. Runs on the calling thread.
+/// `vlf_any_hit` would (interleaved as `vlf_closest_hits`). Runs on the calling thread.
 ///
 /// `rays` and `hits` may be NULL when `n` is 0, and must not overlap.
 ///
@@ -441,9 +449,13 @@ pub unsafe extern "C" fn vlf_any_hits(
         check_disjoint(span(rays, n), span(hits, n), "arrays `rays` and `hits`")?;
         // SAFETY: the caller's promises on the arrays; they do not overlap (checked).
         let (rays, hits) = unsafe { (slice_arg(rays, n, "rays")?, slice_out(hits, n, "hits")?) };
-        let view = field.view();
-        for (ray, hit) in rays.iter().zip(hits) {
-            hit.write(view.any_hit(bytemuck::cast_ref(ray)) as u8);
+        let mut buffer = [false; ARRAY_CHUNK];
+        for (rays, hits) in rays.chunks(ARRAY_CHUNK).zip(hits.chunks_mut(ARRAY_CHUNK)) {
+            let buffer = &mut buffer[..rays.len()];
+            field.any_hits(bytemuck::cast_slice(rays), buffer);
+            for (hit, &any) in hits.iter_mut().zip(buffer.iter()) {
+                hit.write(any as u8);
+            }
         }
         Ok(())
     })

@@ -9,7 +9,8 @@
 //! SSE2 (part of every x86-64) does for sixteen refs at once. [`pass_mask_scalar`] is the plain
 //! twin the tests hold it to, and what other targets use.
 
-use vlf_format::block::{Block, LeafRefs};
+#[cfg(doc)]
+use vlf_format::block::Block;
 
 /// The limits a ref's stored box bytes must not exceed: `[rx_hi, 255 − rx_lo, ry_hi, 255 − ry_lo]`.
 pub(crate) type Limits = [u8; 4];
@@ -53,6 +54,7 @@ pub(crate) fn pass_mask(lanes: &[[u8; 16]; 4], limits: Limits) -> u32 {
 }
 
 /// The triangle ids of the refs of a leaf of a block whose boxes pass `limits`, in ref order.
+#[derive(Clone)]
 pub(crate) struct Passing<'a> {
     /// The leaf's bytes from its first box array on ([`Block::leaf_bytes`]): box array `a` at
     /// `a · len`, the ids at `4 · len`.
@@ -66,9 +68,10 @@ pub(crate) struct Passing<'a> {
 }
 
 impl<'a> Passing<'a> {
+    /// The passing refs of the leaf of `len` refs whose bytes are `bytes` ([`Block::leaf_bytes`]).
     #[inline(always)]
-    pub(crate) fn new(block: &Block<'a>, leaf: LeafRefs, limits: Limits) -> Self {
-        let mut p = Passing { bytes: block.leaf_bytes(leaf), len: leaf.len, limits, group: 0, mask: 0 };
+    pub(crate) fn new(bytes: &'a [u8], len: usize, limits: Limits) -> Self {
+        let mut p = Passing { bytes, len, limits, group: 0, mask: 0 };
         p.fill();
         p
     }
@@ -89,6 +92,12 @@ impl<'a> Passing<'a> {
                 lane
             }),
         }
+    }
+
+    /// Whether no ref is left.
+    #[inline(always)]
+    pub(crate) fn is_done(&self) -> bool {
+        self.mask == 0
     }
 
     /// Moves to the first group with a passing ref, or to the end.
@@ -128,7 +137,7 @@ impl Iterator for Passing<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use vlf_format::block::{Ref, write_block};
+    use vlf_format::block::{Block, Ref, write_block};
 
     /// A small deterministic generator (xorshift), so the test needs no dependency.
     fn rng(seed: u64) -> impl FnMut() -> u64 {
@@ -172,7 +181,8 @@ mod tests {
             for (k, range) in [(0, 0..split), (1, split..m)] {
                 let leaf = block.leaf(k).unwrap();
                 assert_eq!(leaf.len, range.len());
-                let got: Vec<u32> = Passing::new(&block, leaf, limits(x[0], x[1], y[0], y[1])).collect();
+                let got: Vec<u32> =
+                    Passing::new(block.leaf_bytes(leaf), leaf.len, limits(x[0], x[1], y[0], y[1])).collect();
                 let want: Vec<u32> = refs[range]
                     .iter()
                     .filter(|r| r.x[0] <= x[1] && r.x[1] >= x[0] && r.y[0] <= y[1] && r.y[1] >= y[0])

@@ -62,56 +62,33 @@
 #![deny(missing_docs)]
 
 mod all_hits;
+mod batch;
 mod filter;
+mod open_error;
 mod prefetch;
 mod query;
 mod scene;
+mod walk;
 
 use std::fs::File;
 use std::io::Read;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use vlf_format::pack::Unpacked;
 use vlf_format::{AlignedBytes, NO_INDEX};
 
 pub use all_hits::HitLists;
+pub use batch::Interleave;
+pub use open_error::OpenError;
+
+/// Rays per work item of the parallel batch queries.
+#[cfg(feature = "rayon")]
+const PAR_CHUNK: usize = 1024;
 pub use query::FieldView;
 use scene::SceneSections;
 pub use scene::{CameraProjection, LightKind, Material, SceneCamera, SceneLight};
 pub use vlf_format::pack::PackedLayout;
 pub use vlf_format::{FieldReader, FormatError, hex};
 pub use vlf_geom::{Counter, Hit, Intersector, Ray, TraceStats};
-
-/// Why a field could not be opened. Each message is one self-contained line that includes the
-/// underlying cause (so the cause is not repeated as a `source()`).
-#[derive(Debug, thiserror::Error)]
-pub enum OpenError {
-    /// The file could not be opened, measured, read or mapped.
-    #[error("cannot read field {path}: {error}")]
-    Io {
-        /// The path given to [`Field::open`] or [`Field::read`].
-        path: PathBuf,
-        /// What the operating system said.
-        error: std::io::Error,
-    },
-    /// The file was read, but its bytes are not a valid field (or a packed one that does not
-    /// decode).
-    #[error("{path} is not a valid field: {error}")]
-    Format {
-        /// The path given to [`Field::open`] or [`Field::read`].
-        path: PathBuf,
-        /// The first fault found (one variant per fault, naming the section or header field).
-        error: FormatError,
-    },
-    /// Bytes given to [`Field::from_bytes`] are not a valid field.
-    #[error("not a valid field: {0}")]
-    Bytes(FormatError),
-}
-
-impl From<FormatError> for OpenError {
-    fn from(e: FormatError) -> Self {
-        OpenError::Bytes(e)
-    }
-}
 
 /// Where a field's bytes live.
 enum Backing {
@@ -416,29 +393,24 @@ impl Field {
     }
 
     /// Closest hits of a batch on the calling thread: `out[i]` is the hit record of `rays[i]`
-    /// ([`Hit::MISS`] on a miss).
+    /// ([`Hit::MISS`] on a miss), the same as [`Field::closest_hit`] gives, bit for bit.
+    /// Incoherent rays are traced several at a time, interleaved so that their cache misses
+    /// overlap ([`FieldView::closest_hits`]). Allocates nothing.
     ///
     /// # Panics
     /// If the slices differ in length.
     pub fn closest_hits(&self, rays: &[Ray], out: &mut [Hit]) {
         assert_eq!(rays.len(), out.len(), "one output per ray");
-        let view = self.view();
-        for (r, o) in rays.iter().zip(out) {
-            *o = Hit::record(view.closest_hit(r));
-        }
+        self.view().closest_hits_each(rays, Interleave::Auto, |i, hit| out[i] = Hit::record(hit));
     }
 
     /// Any-hit answers of a batch on the calling thread: `out[i]` is [`Field::any_hit`] of
-    /// `rays[i]`.
+    /// `rays[i]`. Interleaved as [`Field::closest_hits`]. Allocates nothing.
     ///
     /// # Panics
     /// If the slices differ in length.
     pub fn any_hits(&self, rays: &[Ray], out: &mut [bool]) {
-        assert_eq!(rays.len(), out.len(), "one output per ray");
-        let view = self.view();
-        for (r, o) in rays.iter().zip(out) {
-            *o = view.any_hit(r);
-        }
+        self.view().any_hits(rays, out);
     }
 
     /// [`Field::closest_hits`] on all cores (rayon's global pool, or the pool installed around
@@ -450,10 +422,7 @@ impl Field {
     pub fn par_closest_hits(&self, rays: &[Ray], out: &mut [Hit]) {
         use rayon::prelude::*;
         assert_eq!(rays.len(), out.len(), "one output per ray");
-        let view = self.view();
-        rays.par_iter().zip(out.par_iter_mut()).with_min_len(256).for_each(|(r, o)| {
-            *o = Hit::record(view.closest_hit(r));
-        });
+        rays.par_chunks(PAR_CHUNK).zip(out.par_chunks_mut(PAR_CHUNK)).for_each(|(r, o)| self.closest_hits(r, o));
     }
 
     /// [`Field::any_hits`] on all cores. Same answers, in the same order.
@@ -464,10 +433,7 @@ impl Field {
     pub fn par_any_hits(&self, rays: &[Ray], out: &mut [bool]) {
         use rayon::prelude::*;
         assert_eq!(rays.len(), out.len(), "one output per ray");
-        let view = self.view();
-        rays.par_iter().zip(out.par_iter_mut()).with_min_len(256).for_each(|(r, o)| {
-            *o = view.any_hit(r);
-        });
+        rays.par_chunks(PAR_CHUNK).zip(out.par_chunks_mut(PAR_CHUNK)).for_each(|(r, o)| self.any_hits(r, o));
     }
 
     /// Where triangle `id` came from: input file, object or mesh, index within it. `None` if
@@ -680,15 +646,6 @@ impl Intersector for FieldView<'_> {
     }
     fn any_hit_counted(&self, ray: &Ray, work: &mut TraceStats) -> Option<Hit> {
         FieldView::any_hit_counted(self, ray, work)
-    }
-}
-
-impl OpenError {
-    fn with_path(self, path: &Path) -> OpenError {
-        match self {
-            OpenError::Bytes(error) => OpenError::Format { path: path.to_owned(), error },
-            other => other,
-        }
     }
 }
 

@@ -139,6 +139,48 @@ impl Contestant for FieldContestant {
     }
 }
 
+/// The same field through its batch queries (`FieldView::closest_hits` and `any_hits`), which
+/// interleave incoherent rays to overlap their cache misses: what `trace`, the C arrays and the
+/// Python package call. Named `field batch` in the tables.
+pub struct FieldBatch<'a>(pub &'a FieldContestant);
+
+impl Contestant for FieldBatch<'_> {
+    fn name(&self) -> &'static str {
+        "field batch"
+    }
+    fn describe(&self) -> String {
+        format!("{}, batch queries", self.0.describe())
+    }
+    fn build_seconds(&self) -> f64 {
+        self.0.build_seconds()
+    }
+    fn bytes(&self) -> u64 {
+        self.0.bytes()
+    }
+    fn closest_hit(&self, ray: &Ray) -> Option<PeerHit> {
+        self.0.closest_hit(ray)
+    }
+    fn any_hit(&self, ray: &Ray) -> bool {
+        self.0.any_hit(ray)
+    }
+    fn closest_hits(&self, rays: &[Ray], out: &mut [Option<PeerHit>]) {
+        let mut hits = [None; BATCH];
+        for (rays, out) in rays.chunks(BATCH).zip(out.chunks_mut(BATCH)) {
+            let hits = &mut hits[..rays.len()];
+            self.0.field.view().closest_hits(rays, hits);
+            for (o, h) in out.iter_mut().zip(hits.iter()) {
+                *o = h.map(|h| PeerHit { t: h.t, prim: h.prim });
+            }
+        }
+    }
+    fn any_hits(&self, rays: &[Ray], out: &mut [bool]) {
+        self.0.field.view().any_hits(rays, out);
+    }
+}
+
+/// Rays per call of the batch query in [`FieldBatch`] (its output is converted on the stack).
+const BATCH: usize = 1024;
+
 /// The CRT kd-tree of `vlf-kdtree`.
 pub struct KdContestant {
     pub tree: KdTree,

@@ -24,7 +24,7 @@ pub mod scenes;
 
 use crate::median;
 use anyhow::Context as _;
-use contestant::{Contestant, FieldContestant, KdContestant, PeerHit};
+use contestant::{Contestant, FieldBatch, FieldContestant, KdContestant, PeerHit};
 pub use model::*;
 use rayon::prelude::*;
 use rays::RaySet;
@@ -158,7 +158,8 @@ pub fn run_scene(spec: &SceneSpec, cfg: &PeersConfig) -> anyhow::Result<SceneRes
     let (center, radius) = field.field.bounding_sphere();
     let (sets, light) = ray_sets(&scene, &field, cfg);
     let peers = build_peers(&scene.triangles, cfg, center, radius)?;
-    let mut all: Vec<&dyn Contestant> = vec![&field];
+    let batch = FieldBatch(&field);
+    let mut all: Vec<&dyn Contestant> = vec![&field, &batch];
     all.extend(peers.iter().map(|b| b.as_ref()));
     let built = all
         .iter()
@@ -270,8 +271,15 @@ pub fn run(cfg: &PeersConfig) -> anyhow::Result<report::Report> {
         .iter()
         .flat_map(|s| {
             s.sets.iter().flat_map(move |set| {
-                set.checks.iter().filter(|c| c.contestant == "field" && c.inexact() > 0).map(move |c| {
-                    format!("{} / {}: {} of {} rays differ from the brute force", s.name, set.name, c.inexact(), c.rays)
+                set.checks.iter().filter(|c| c.contestant.starts_with("field") && c.inexact() > 0).map(move |c| {
+                    format!(
+                        "{} / {} / {}: {} of {} rays differ from the brute force",
+                        s.name,
+                        set.name,
+                        c.contestant,
+                        c.inexact(),
+                        c.rays
+                    )
                 })
             })
         })

@@ -1,0 +1,272 @@
+//! Batches of rays, interleaved to hide memory latency.
+//!
+//! A single ray's walk is a chain of dependent loads: the tile's TILES entry, then its block,
+//! then a leaf's boxes and ids, then the triangles. When the field is larger than the caches,
+//! most of those miss, and a ray spends most of its time waiting on them one after the other.
+//! A batch keeps [`IN_FLIGHT`] rays going at once: it moves one ray a step along its walk
+//! ([`Walk::step`]), which starts loading what that ray reads next, then turns to the next ray,
+//! and comes back to the first when its data has had time to arrive (asynchronous memory access
+//! chaining: Kocberber et al., "Asynchronous Memory Access Chaining", VLDB 2015). Each ray sees
+//! the same leaves in the same order and runs the same leaf tests as a single query, so a batch
+//! gives the same answers, bit for bit, in the rays' order.
+
+use crate::filter::Passing;
+use crate::prefetch::prefetch;
+use crate::query::{FieldTriangles, FieldView, closest_in_refs, closest_refs};
+use crate::walk::{Leaf, Setup, Step, Walk};
+use vlf_geom::{Closest, Hit, Ray, TriRay};
+
+/// Rays a batch keeps in flight: enough to cover a miss to memory (150–200 ns on the machines
+/// measured) with the steps of the others, few enough that their state stays in L1.
+const IN_FLIGHT: usize = 8;
+
+/// Fields whose tile blocks and triangles take fewer bytes than this mostly stay in the cache
+/// (this machine class has 1 MiB of L2 per core and a shared L3): interleaving their rays would
+/// only add its bookkeeping.
+const CACHED_BYTES: usize = 8 << 20;
+
+/// Rays a batch judges at a time: traced in turn if they are coherent, else interleaved.
+const WINDOW: usize = 256;
+
+/// The squared cosine of the angle between two directions above which they count as nearly the
+/// same (about 1.8°).
+const COHERENT_COS2: f32 = 0.999;
+
+/// Whether a batch query interleaves its rays.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Interleave {
+    /// Interleave windows of rays that are not coherent, on a field larger than a cache holds;
+    /// trace the others in turn. What the batch queries do.
+    #[default]
+    Auto,
+    /// Interleave every window.
+    Always,
+    /// Trace every ray in turn, as a loop over the single-ray query would.
+    Never,
+}
+
+/// One ray in flight: its walk, its search state `S`, and the leaf it will test next (loading).
+struct Lane<'a, S> {
+    index: usize,
+    setup: Setup,
+    walk: Walk<'a>,
+    tri_ray: TriRay,
+    state: S,
+    pending: Pending<'a>,
+}
+
+/// What a lane will do on its next turn, besides stepping its walk.
+enum Pending<'a> {
+    Nothing,
+    /// Choose the refs of a leaf whose boxes and ids are loading, and ask for their triangles.
+    Leaf(Leaf<'a>),
+    /// Test the refs of a leaf the ray leaves at the given parameter (the triangles loading).
+    Refs(Passing<'a>, f64),
+}
+
+impl<'a> FieldView<'a> {
+    /// The closest hits of `rays` (world coordinates): `out[i]` is
+    /// [`FieldView::closest_hit`]`(&rays[i])`, the same hit bit for bit. Incoherent rays on a
+    /// field larger than the cache are traced several at once, interleaved, so that their cache
+    /// misses overlap ([`Interleave::Auto`]); allocates nothing.
+    ///
+    /// # Panics
+    /// If the slices differ in length.
+    pub fn closest_hits(&self, rays: &[Ray], out: &mut [Option<Hit>]) {
+        self.closest_hits_in(rays, out, Interleave::Auto);
+    }
+
+    /// [`FieldView::closest_hits`], interleaving as `how` says. The answers do not depend on it.
+    ///
+    /// # Panics
+    /// If the slices differ in length.
+    pub fn closest_hits_in(&self, rays: &[Ray], out: &mut [Option<Hit>], how: Interleave) {
+        assert_eq!(rays.len(), out.len(), "one output per ray");
+        self.closest_hits_each(rays, how, |i, hit| out[i] = hit);
+    }
+
+    /// [`FieldView::closest_hits_in`], handing ray `i`'s hit to `out(i, hit)` (in no particular
+    /// order).
+    pub(crate) fn closest_hits_each(&self, rays: &[Ray], how: Interleave, mut out: impl FnMut(usize, Option<Hit>)) {
+        let tris = FieldTriangles(self.reader.triangles);
+        for (w, window) in rays.chunks(WINDOW).enumerate() {
+            let base = w * WINDOW;
+            if !self.worth_interleaving(window, how) {
+                for (i, ray) in window.iter().enumerate() {
+                    out(base + i, self.closest_hit(ray));
+                }
+                continue;
+            }
+            self.interleaved(
+                window,
+                |ray| Closest::new(ray.tmax),
+                |best, leaf| closest_refs(leaf, best),
+                |tri_ray, _, best, refs, exit_t| closest_in_refs(tri_ray, &tris, refs, exit_t, best, &mut ()),
+                |i, best| out(base + i, best.and_then(|b| b.hit)),
+            );
+        }
+    }
+
+    /// Whether each of `rays` hits anything: `out[i]` is [`FieldView::any_hit`]`(&rays[i])`.
+    /// Interleaved as [`FieldView::closest_hits`]; allocates nothing.
+    ///
+    /// # Panics
+    /// If the slices differ in length.
+    pub fn any_hits(&self, rays: &[Ray], out: &mut [bool]) {
+        self.any_hits_in(rays, out, Interleave::Auto);
+    }
+
+    /// [`FieldView::any_hits`], interleaving as `how` says. The answers do not depend on it.
+    ///
+    /// # Panics
+    /// If the slices differ in length.
+    pub fn any_hits_in(&self, rays: &[Ray], out: &mut [bool], how: Interleave) {
+        assert_eq!(rays.len(), out.len(), "one output per ray");
+        let tris = FieldTriangles(self.reader.triangles);
+        for (rays, out) in rays.chunks(WINDOW).zip(out.chunks_mut(WINDOW)) {
+            if !self.worth_interleaving(rays, how) {
+                for (ray, out) in rays.iter().zip(out.iter_mut()) {
+                    *out = self.any_hit(ray);
+                }
+                continue;
+            }
+            self.interleaved(
+                rays,
+                |_| None,
+                |_, leaf| leaf.passing(leaf.exit_t),
+                |tri_ray, ray, found, refs, _| {
+                    *found = tri_ray.any_in(&tris, refs, ray.tmax, &mut ());
+                    found.is_some()
+                },
+                |i, found| out[i] = found.flatten().is_some(),
+            );
+        }
+    }
+
+    /// Whether to interleave `rays`: as `how` says, and for [`Interleave::Auto`], whether it
+    /// pays: the field is larger than a cache holds, and the rays are not coherent.
+    fn worth_interleaving(&self, rays: &[Ray], how: Interleave) -> bool {
+        match how {
+            Interleave::Always => true,
+            Interleave::Never => false,
+            Interleave::Auto => {
+                let bytes = std::mem::size_of_val(self.reader.leaves) + std::mem::size_of_val(self.reader.triangles);
+                bytes > CACHED_BYTES && !self.coherent(rays)
+            }
+        }
+    }
+
+    /// Whether most neighbours in `rays` start within a tile of each other in nearly the same
+    /// direction. Such rays read mostly the same tiles, which the first of them brings into the
+    /// cache; traced one after the other they wait on little, and interleaving them would only
+    /// add its bookkeeping.
+    fn coherent(&self, rays: &[Ray]) -> bool {
+        let reach = self.grid.tile_width * self.grid.tile_width;
+        let dot = |p: [f32; 3], q: [f32; 3]| p[0] * q[0] + p[1] * q[1] + p[2] * q[2];
+        let near = |a: &Ray, b: &Ray| {
+            let (o, d) = (a.org.map(|v| v as f64), b.org.map(|v| v as f64));
+            let apart = (0..3).map(|k| (o[k] - d[k]) * (o[k] - d[k])).sum::<f64>();
+            let cos = dot(a.dir, b.dir);
+            cos > 0.0 && cos * cos >= COHERENT_COS2 * dot(a.dir, a.dir) * dot(b.dir, b.dir) && apart < reach
+        };
+        let close = rays.windows(2).filter(|w| near(&w[0], &w[1])).count();
+        2 * close >= rays.len()
+    }
+
+    /// Starts loading the triangles of the refs `passing`.
+    #[inline(always)]
+    fn prefetch_triangles(&self, passing: Passing<'_>) {
+        for id in passing {
+            if let Some(t) = self.reader.triangles.get(id as usize) {
+                prefetch(t);
+            }
+        }
+    }
+
+    /// Runs the search of every ray of `rays`, [`IN_FLIGHT`] at a time: `start` makes a ray's
+    /// state; for each leaf the ray reaches, `refs` chooses the refs to test (their triangles
+    /// start loading), and on the lane's next turn `visit` tests them and says whether the ray's
+    /// search is over; `finish(i, s)` receives the final state of ray `i` (`None` for a ray that misses
+    /// the scene or is invalid).
+    #[inline(always)]
+    fn interleaved<S>(
+        &self,
+        rays: &[Ray],
+        start: impl Fn(&Ray) -> S,
+        refs: impl Fn(&S, &Leaf<'a>) -> Passing<'a>,
+        visit: impl Fn(&TriRay, &Ray, &mut S, Passing<'a>, f64) -> bool,
+        mut finish: impl FnMut(usize, Option<S>),
+    ) {
+        let origin = self.origin();
+        let mut next = 0;
+        // The next ray that reaches the scene, as a lane; the rays skipped on the way are
+        // finished.
+        let launch = |next: &mut usize, finish: &mut dyn FnMut(usize, Option<S>)| -> Option<Lane<'a, S>> {
+            while let Some(ray) = rays.get(*next) {
+                let index = *next;
+                *next += 1;
+                if let Some(setup) = self.setup(ray, origin) {
+                    if let Some(walk) = Walk::new(&self.reader, &self.grid, &setup) {
+                        let tri_ray = TriRay::relative(ray, origin);
+                        return Some(Lane {
+                            index,
+                            setup,
+                            walk,
+                            tri_ray,
+                            state: start(ray),
+                            pending: Pending::Nothing,
+                        });
+                    }
+                }
+                finish(index, None);
+            }
+            None
+        };
+        let mut lanes: [Option<Lane<'a, S>>; IN_FLIGHT] = std::array::from_fn(|_| None);
+        for lane in &mut lanes {
+            *lane = launch(&mut next, &mut finish);
+        }
+        let mut live = lanes.iter().filter(|l| l.is_some()).count();
+        while live > 0 {
+            for slot in &mut lanes {
+                let Some(lane) = slot else { continue };
+                // The leaf this lane reached on its last turn has had time to load: choose its refs
+                // and ask for their triangles, to be tested on the next turn.
+                let mut done = match std::mem::replace(&mut lane.pending, Pending::Nothing) {
+                    Pending::Leaf(leaf) => {
+                        let chosen = refs(&lane.state, &leaf);
+                        if chosen.is_done() {
+                            visit(&lane.tri_ray, &rays[lane.index], &mut lane.state, chosen, leaf.exit_t)
+                        } else {
+                            self.prefetch_triangles(chosen.clone());
+                            lane.pending = Pending::Refs(chosen, leaf.exit_t);
+                            continue;
+                        }
+                    }
+                    Pending::Refs(chosen, exit_t) => {
+                        visit(&lane.tri_ray, &rays[lane.index], &mut lane.state, chosen, exit_t)
+                    }
+                    Pending::Nothing => false,
+                };
+                if !done {
+                    match lane.walk.step(&self.grid, &lane.setup, &mut ()) {
+                        Step::Leaf(leaf) => {
+                            leaf.prefetch();
+                            lane.pending = Pending::Leaf(leaf);
+                        }
+                        Step::Wait => {}
+                        Step::End => done = true,
+                    }
+                }
+                if done {
+                    let Some(lane) = slot.take() else { continue };
+                    finish(lane.index, Some(lane.state));
+                    *slot = launch(&mut next, &mut finish);
+                    if slot.is_none() {
+                        live -= 1;
+                    }
+                }
+            }
+        }
+    }
+}
