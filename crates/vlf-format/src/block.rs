@@ -105,6 +105,18 @@ impl LeafRefs {
     }
 }
 
+/// The triangle ids of a leaf of `len` refs, from its bytes ([`Block::leaf_bytes`] of a parsed
+/// block, which holds them).
+///
+/// # Panics
+/// If `leaf_bytes` is shorter than `8 · len`, or not 4-aligned: never for [`Block::leaf_bytes`].
+#[inline(always)]
+pub fn leaf_ids(leaf_bytes: &[u8], len: usize) -> &[u32] {
+    // Aligned: the block starts on a word, its header and every leaf take multiples of 4 bytes,
+    // and a leaf's boxes 4 bytes per ref.
+    try_cast_slice(&leaf_bytes[4 * len..8 * len]).expect("4-aligned ids")
+}
+
 /// A tile block read in place. Every accessor is bounds-checked against the block; a block whose
 /// header does not fit in the words it was read from is not parsed at all.
 #[derive(Clone, Copy, Debug)]
@@ -201,10 +213,7 @@ impl<'a> Block<'a> {
     /// The triangle ids of a leaf's refs, in place.
     #[inline(always)]
     pub fn ids(&self, leaf: LeafRefs) -> &'a [u32] {
-        let at = leaf.start + 4 * leaf.len;
-        // Aligned: the block starts on a word, its header and every leaf take multiples of 4
-        // bytes, and a leaf's boxes 4 bytes per ref.
-        try_cast_slice(&self.bytes[at..at + 4 * leaf.len]).expect("4-aligned ids")
+        leaf_ids(self.leaf_bytes(leaf), leaf.len)
     }
 
     /// The block's length in words.

@@ -126,10 +126,7 @@ impl<'a> Leaf<'a> {
     /// The triangle ids of all the leaf's refs, before the box test.
     #[inline(always)]
     pub(crate) fn ids(&self) -> &'a [u32] {
-        // In bounds and aligned: the block parsed, so it holds its refs; its ids follow the
-        // leaf's four box arrays, at a multiple of 4 bytes from the block's 8-aligned start.
-        let ids = self.bytes.get(4 * self.len..8 * self.len).unwrap_or(&[]);
-        bytemuck::try_cast_slice(ids).unwrap_or(&[])
+        vlf_format::block::leaf_ids(self.bytes, self.len)
     }
 
     /// Starts loading the leaf's boxes and ids.
