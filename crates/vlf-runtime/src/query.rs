@@ -181,8 +181,11 @@ impl<'a> FieldView<'a> {
         let m = self.reader.rotations.get(dir)?;
         let o = mul(m, oc);
         let dc = mul(m, d);
-        // Only a lying file can make the beam coordinate stand still or turn non-finite.
-        if !(dc[2] * sign > 0.0) || !o.iter().chain(&dc).all(|v| v.is_finite()) {
+        // Only a lying file can make the beam coordinate stand still or turn non-finite. (The sum
+        // is finite only if every term is: a rotation keeps lengths, so a valid file cannot
+        // overflow it.)
+        let sum = o[0] + o[1] + o[2] + dc[0] + dc[1] + dc[2];
+        if !(dc[2] * sign > 0.0) || !sum.is_finite() {
             return None;
         }
         let inv_step = self.levels_per_unit;
