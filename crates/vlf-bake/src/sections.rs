@@ -18,8 +18,9 @@ use vlf_geom::frame::frame;
 /// hash, `formats/vlf.md` §3.2). Revision 2 (format 1.1) adds the MATERIALS, CAMERAS and LIGHTS
 /// sections, and with them what an OBJ's `.mtl` files hold, to the input hash. Revision 3 (format
 /// 2.0) bakes tile blocks with leaves placed by the surface-area heuristic and boxed refs, stores
-/// triangles relative to the scene's centre and hashes that centre.
-pub const BAKER_REVISION: u32 = 3;
+/// triangles relative to the scene's centre and hashes that centre. Revision 4 weighs each ref
+/// in the heuristic by its box's share of the tile (`formats/vlf.md` §6.3).
+pub const BAKER_REVISION: u32 = 4;
 
 /// The input hash of `formats/vlf.md` §3.2.
 pub fn input_hash(scene: &Scene, request: &Request) -> [u8; 32] {

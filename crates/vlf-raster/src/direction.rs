@@ -6,7 +6,7 @@
 //! [`build_direction`] does all of it for every triangle of a scene (the bake); the parts are
 //! public so that a field's tiles can be rebuilt one at a time in memory (`vlf-scene`'s edits).
 
-use crate::leaves::{DepthPolicy, boundaries};
+use crate::leaves::{DepthPolicy, Slab, boundaries, ref_weight};
 use crate::raster::{Part, rasterize};
 use vlf_format::block::{BOX_CELLS, MAX_LEAVES, Ref, block_words, write_block};
 use vlf_format::{EMPTY_TILE, StatisticsRecord, Z_LEVELS, size};
@@ -60,7 +60,7 @@ pub struct Scratch {
     entries: Vec<Entry>,
     sorted: Vec<Entry>,
     tile_start: Vec<u32>,
-    ranges: Vec<(u32, u32)>,
+    slabs: Vec<Slab>,
     bounds: Vec<u32>,
     leaf_refs: Vec<Vec<Ref>>,
 }
@@ -128,10 +128,12 @@ impl Grid {
     pub fn write_tile(&self, entries: &[Entry], s: &mut Scratch, out: &mut Vec<u64>) -> Result<TileBlock, TooLarge> {
         debug_assert!(!entries.is_empty() && entries.windows(2).all(|w| w[0].tri < w[1].tri));
         // The tile's z range, non-empty.
-        s.ranges.clear();
-        s.ranges.extend(entries.iter().map(|en| (en.z[0] as u32, en.z[1] as u32)));
-        let lo = s.ranges.iter().map(|r| r.0).min().unwrap_or(0);
-        let hi = s.ranges.iter().map(|r| r.1).max().unwrap_or(Z_LEVELS);
+        s.slabs.clear();
+        s.slabs.extend(
+            entries.iter().map(|en| Slab { z: (en.z[0] as u32, en.z[1] as u32), weight: ref_weight(en.cells) }),
+        );
+        let lo = s.slabs.iter().map(|r| r.z.0).min().unwrap_or(0);
+        let hi = s.slabs.iter().map(|r| r.z.1).max().unwrap_or(Z_LEVELS);
         let (lo, hi) = if lo < hi {
             (lo, hi)
         } else if hi < Z_LEVELS {
@@ -139,7 +141,7 @@ impl Grid {
         } else {
             (lo - 1, hi)
         };
-        boundaries(&s.ranges, lo, hi, &self.depth, &mut s.bounds);
+        boundaries(&s.slabs, lo, hi, &self.depth, &mut s.bounds);
         let k = s.bounds.len() - 1;
         debug_assert!(k as u32 <= MAX_LEAVES);
         // Each ref goes to every leaf its closed range meets; entries are in id order, so each

@@ -4,14 +4,22 @@
 //!
 //! A ray walks a tile's leaves in order along the beam and stops once it has a hit within the part
 //! already searched, so a leaf's expected cost is roughly the chance that a ray reaches it (its
-//! share of the tile's length) times its refs. A split at `s` of a range `[a, b]` holding `N` refs
-//! costs `C + ((s − a)·N_a + (b − s)·N_b) / (b − a)` ref tests, against `N` for a single leaf,
-//! where `N_a` and `N_b` count the refs that meet each side (a ref straddling `s` is in both) and
-//! `C` ([`LEAF_COST`]) is what visiting one more leaf costs in ref tests. The best split is taken
-//! while it is cheaper, so dense parts get small leaves, empty gaps become empty leaves of no
-//! refs, and refs that all overlap (coincident triangles) stay in one leaf instead of being copied
-//! into many. The old mid-point BSP copied a pile of coincident triangles into every one of its
-//! `2^D` leaves.
+//! share of the tile's length) times what its refs cost. A split at `s` of a range `[a, b]` whose
+//! refs cost `W` costs `C + ((s − a)·W_a + (b − s)·W_b) / (b − a)` triangle tests, against `W`
+//! for a single leaf, where `W_a` and `W_b` sum the costs of the refs that meet each side (a ref
+//! straddling `s` is in both) and `C` ([`LEAF_COST`]) is what visiting one more leaf costs.
+//!
+//! A ref costs a ray that reaches it its share of a sixteen-ref box test plus, if its box passes
+//! that test, one triangle test ([`ref_weight`]): a triangle whose box covers the whole tile is
+//! tested by nearly every ray, one that covers a corner by few. So tiles of triangles small
+//! against the tile get long leaves of many cheap refs, and tiles of large triangles short ones.
+//!
+//! The best split is taken while it is cheaper, so dense parts get small leaves, empty gaps become
+//! empty leaves of no refs, and refs that all overlap (coincident triangles) stay in one leaf
+//! instead of being copied into many. The old mid-point BSP copied a pile of coincident triangles
+//! into every one of its `2^D` leaves.
+
+use vlf_format::block::BOX_CELLS;
 
 /// Default target of triangles per BSP leaf.
 pub const DEFAULT_LEAF_SIZE: u32 = 4;
@@ -33,19 +41,44 @@ impl Default for DepthPolicy {
     }
 }
 
-/// The cost of visiting a leaf, in ref tests (tuned by `vlf-bench peers --sweep`): a leaf visit
-/// computes the ray's box and starts a group of sixteen box tests, and ends a ray's search only
-/// at its far side.
-pub const LEAF_COST: f64 = 3.0;
+/// The cost of visiting a leaf, in triangle tests: a leaf visit finds the leaf, computes the
+/// ray's box over it and starts its box tests, and ends a ray's search only at its far side.
+/// Chosen with [`RAY_CELLS`] by measuring bakes of the random 100K scene and the dragon
+/// (`docs/benchmarks/parameters.md`, "Leaves weighted by their boxes").
+pub const LEAF_COST: f64 = 1.5;
+
+/// A ref's share of a sixteen-ref box test, in triangle tests.
+pub const BOX_TEST_COST: f64 = 0.03;
+
+/// How far, in box cells, a typical ray's box over a leaf (grown by the margin) reaches past a
+/// ref's box when the two meet: each side of the ref's box is grown by this much to estimate the
+/// chance that a ray through the tile passes it.
+pub const RAY_CELLS: f64 = 32.0;
 
 /// A ref's z range in quantized levels, closed: `lo ≤ hi`.
 pub type Range = (u32, u32);
 
-/// The boundaries of the leaves of a tile whose refs have the z ranges `refs`, all within
-/// `[lo, hi]` (`lo < hi`): `lo`, the split points in increasing order, `hi`. Leaf `k` is the
-/// closed slab between boundaries `k` and `k + 1`; a ref belongs to every leaf it meets.
-/// Deterministic: the same ranges in any order give the same boundaries.
-pub fn boundaries(refs: &[Range], lo: u32, hi: u32, policy: &DepthPolicy, out: &mut Vec<u32>) {
+/// A ref as the split heuristic sees it: its z range, and what a ray that reaches it expects to
+/// pay for it, in triangle tests ([`ref_weight`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Slab {
+    pub z: Range,
+    pub weight: f64,
+}
+
+/// What a ref whose box in its tile is `cells` (`x_lo, x_hi, y_lo, y_hi`) costs a ray that
+/// reaches its leaf, in triangle tests: [`BOX_TEST_COST`], plus the fraction of the tile its box
+/// covers once each side is grown by [`RAY_CELLS`] (the chance that its triangle is tested).
+pub fn ref_weight(cells: [u8; 4]) -> f64 {
+    let side = |lo: u8, hi: u8| ((hi.saturating_sub(lo) as f64 + 1.0 + RAY_CELLS) / BOX_CELLS as f64).min(1.0);
+    BOX_TEST_COST + side(cells[0], cells[1]) * side(cells[2], cells[3])
+}
+
+/// The boundaries of the leaves of a tile whose refs are `refs`, all within `[lo, hi]`
+/// (`lo < hi`): `lo`, the split points in increasing order, `hi`. Leaf `k` is the closed slab
+/// between boundaries `k` and `k + 1`; a ref belongs to every leaf it meets. Deterministic: the
+/// same refs in any order give the same boundaries.
+pub fn boundaries(refs: &[Slab], lo: u32, hi: u32, policy: &DepthPolicy, out: &mut Vec<u32>) {
     out.clear();
     out.push(lo);
     let mut scratch = Scratch::default();
@@ -54,21 +87,22 @@ pub fn boundaries(refs: &[Range], lo: u32, hi: u32, policy: &DepthPolicy, out: &
 
 #[derive(Default)]
 struct Scratch {
-    starts: Vec<u32>,
-    ends: Vec<u32>,
+    /// The refs' starts and ends with their weights, each in increasing order.
+    starts: Vec<(u32, f64)>,
+    ends: Vec<(u32, f64)>,
     candidates: Vec<u32>,
 }
 
 /// Splits `[a, b]` over `refs` (each meeting it) recursively, appending the far boundary of each
 /// leaf in order.
-fn split(refs: Vec<Range>, a: u32, b: u32, depth: u32, policy: &DepthPolicy, out: &mut Vec<u32>, s: &mut Scratch) {
+fn split(refs: Vec<Slab>, a: u32, b: u32, depth: u32, policy: &DepthPolicy, out: &mut Vec<u32>, s: &mut Scratch) {
     match best_split(&refs, a, b, depth, policy, s) {
         None => out.push(b),
         Some(at) => {
             // A ref ending before `at` is left of it, one starting after it right of it; one
             // that meets `at` (the closed boundary both leaves share) is in both.
-            let left: Vec<Range> = refs.iter().copied().filter(|r| r.0 <= at).collect();
-            let right: Vec<Range> = refs.into_iter().filter(|r| r.1 >= at).collect();
+            let left: Vec<Slab> = refs.iter().copied().filter(|r| r.z.0 <= at).collect();
+            let right: Vec<Slab> = refs.into_iter().filter(|r| r.z.1 >= at).collect();
             split(left, a, at, depth + 1, policy, out, s);
             split(right, at, b, depth + 1, policy, out, s);
         }
@@ -76,38 +110,45 @@ fn split(refs: Vec<Range>, a: u32, b: u32, depth: u32, policy: &DepthPolicy, out
 }
 
 /// The split point of `[a, b]` that costs least, if it costs less than one leaf.
-fn best_split(refs: &[Range], a: u32, b: u32, depth: u32, policy: &DepthPolicy, s: &mut Scratch) -> Option<u32> {
+fn best_split(refs: &[Slab], a: u32, b: u32, depth: u32, policy: &DepthPolicy, s: &mut Scratch) -> Option<u32> {
     let n = refs.len();
     if n <= policy.leaf_size as usize || depth >= policy.max_depth || b - a < 2 {
         return None;
     }
+    // Sorted by position, then weight, so that every sum below runs in an order that does not
+    // depend on the refs' order.
+    let by_key = |x: &(u32, f64)| (x.0, x.1.to_bits());
     s.starts.clear();
-    s.starts.extend(refs.iter().map(|r| r.0));
-    s.starts.sort_unstable();
+    s.starts.extend(refs.iter().map(|r| (r.z.0, r.weight)));
+    s.starts.sort_unstable_by_key(by_key);
     s.ends.clear();
-    s.ends.extend(refs.iter().map(|r| r.1));
-    s.ends.sort_unstable();
+    s.ends.extend(refs.iter().map(|r| (r.z.1, r.weight)));
+    s.ends.sort_unstable_by_key(by_key);
+    let total: f64 = s.starts.iter().map(|x| x.1).sum();
     // Candidates just past a ref's end (it then stays left only) and just before a ref's start
     // (it stays right only), strictly inside the range.
     s.candidates.clear();
-    s.candidates.extend(s.ends.iter().map(|&e| e + 1).chain(s.starts.iter().map(|&b| b.saturating_sub(1))));
+    s.candidates.extend(s.ends.iter().map(|e| e.0 + 1).chain(s.starts.iter().map(|b| b.0.saturating_sub(1))));
     s.candidates.retain(|&c| c > a && c < b);
     s.candidates.sort_unstable();
     s.candidates.dedup();
     let length = (b - a) as f64;
-    let (mut best_cost, mut best) = (n as f64, None);
-    let (mut left, mut ended) = (0, 0);
+    let (mut best_cost, mut best) = (total, None);
+    let (mut started, mut ended) = (0, 0);
+    let (mut left, mut gone) = (0.0, 0.0);
     for &at in &s.candidates {
         // Refs meeting [a, at]: those starting at or before `at`; meeting [at, b]: those not
         // ended before `at`.
-        while left < n && s.starts[left] <= at {
-            left += 1;
+        while started < n && s.starts[started].0 <= at {
+            left += s.starts[started].1;
+            started += 1;
         }
-        while ended < n && s.ends[ended] < at {
+        while ended < n && s.ends[ended].0 < at {
+            gone += s.ends[ended].1;
             ended += 1;
         }
-        let right = n - ended;
-        let cost = LEAF_COST + ((at - a) as f64 * left as f64 + (b - at) as f64 * right as f64) / length;
+        let right = total - gone;
+        let cost = LEAF_COST + ((at - a) as f64 * left + (b - at) as f64 * right) / length;
         if cost < best_cost {
             (best_cost, best) = (cost, Some(at));
         }
@@ -123,9 +164,17 @@ mod tests {
         DepthPolicy { leaf_size, max_depth }
     }
 
+    /// A ref whose box covers the whole tile.
+    const WHOLE: [u8; 4] = [0, 255, 0, 255];
+
     fn leaves(refs: &[Range], lo: u32, hi: u32, p: DepthPolicy) -> Vec<u32> {
+        leaves_boxed(refs, WHOLE, lo, hi, p)
+    }
+
+    fn leaves_boxed(refs: &[Range], cells: [u8; 4], lo: u32, hi: u32, p: DepthPolicy) -> Vec<u32> {
+        let slabs: Vec<Slab> = refs.iter().map(|&z| Slab { z, weight: ref_weight(cells) }).collect();
         let mut out = Vec::new();
-        boundaries(refs, lo, hi, &p, &mut out);
+        boundaries(&slabs, lo, hi, &p, &mut out);
         out
     }
 
@@ -170,9 +219,56 @@ mod tests {
 
     #[test]
     fn the_order_of_the_refs_does_not_matter() {
-        let mut refs: Vec<Range> = (0..300u32).map(|i| ((i * 7919) % 9000, (i * 7919) % 9000 + i % 50)).collect();
-        let a = leaves(&refs, 0, 9100, policy(4, 10));
-        refs.reverse();
-        assert_eq!(leaves(&refs, 0, 9100, policy(4, 10)), a);
+        // Weights of every size, so that the sums would differ in their last bits if they ran in
+        // the refs' order.
+        let mut refs: Vec<Slab> = (0..300u32)
+            .map(|i| {
+                let z = ((i * 7919) % 9000, (i * 7919) % 9000 + i % 50);
+                let (x, y) = ((i * 37 % 256) as u8, (i * 91 % 256) as u8);
+                Slab { z, weight: ref_weight([x / 2, x, y / 3, y]) }
+            })
+            .collect();
+        let mut a = Vec::new();
+        boundaries(&refs, 0, 9100, &policy(4, 10), &mut a);
+        assert!(a.len() > 2, "the refs are split: {a:?}");
+        for round in 0..4 {
+            refs.reverse();
+            refs.rotate_left(round * 37);
+            let mut b = Vec::new();
+            boundaries(&refs, 0, 9100, &policy(4, 10), &mut b);
+            assert_eq!(b, a);
+        }
+    }
+
+    #[test]
+    fn a_ref_weighs_its_box_test_and_the_chance_its_triangle_is_tested() {
+        assert_eq!(ref_weight(WHOLE), BOX_TEST_COST + 1.0);
+        let corner = ref_weight([0, 0, 0, 0]);
+        let side = (1.0 + RAY_CELLS) / 256.0;
+        assert!((corner - (BOX_TEST_COST + side * side)).abs() < 1e-12, "{corner}");
+        // Growing a box never makes its ref cheaper; a box over half the tile is tested by about
+        // half the rays on each axis.
+        assert!(ref_weight([0, 10, 0, 10]) < ref_weight([0, 20, 0, 10]));
+        assert!(ref_weight([0, 127, 0, 255]) < 0.7);
+        // A lying box (lo above hi) weighs as a one-cell box.
+        assert_eq!(ref_weight([9, 3, 0, 0]), corner);
+    }
+
+    #[test]
+    fn refs_of_small_boxes_get_longer_leaves_than_refs_that_cover_the_tile() {
+        // The same uniform z ranges: triangles that cover the whole tile are tested by every ray
+        // that reaches them, so they are cut finely; triangles in a corner of the tile are
+        // mostly rejected by the box test, so their leaves hold more of them.
+        let refs: Vec<Range> = (0..2000).map(|i| (i * 30, i * 30 + 40)).collect();
+        let whole = leaves_boxed(&refs, WHOLE, 0, 60_100, policy(1, 12));
+        let corner = leaves_boxed(&refs, [0, 8, 0, 8], 0, 60_100, policy(1, 12));
+        assert!(
+            corner.len() * 3 < whole.len(),
+            "{} leaves for small boxes, {} for whole-tile boxes",
+            corner.len() - 1,
+            whole.len() - 1
+        );
+        let most = |b: &[u32]| members(b, &refs).into_iter().max().unwrap();
+        assert!(most(&corner) > 2 * most(&whole), "{} vs {}", most(&corner), most(&whole));
     }
 }
