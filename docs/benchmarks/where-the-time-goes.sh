@@ -27,7 +27,8 @@ cargo build --release -q --bin vlf-bake
 B=target/release/vlf-bake
 
 [ -f "$W/r100k.obj" ] || $B gen random --count 100000 --size 0.05 --seed 1 -o "$W/r100k.obj" -q
-[ -f "$W/r100k.vlf" ] || $B bake "$W/r100k.obj" -o "$W/r100k.vlf" -q
+# Baked every run: a field left by an older baker would measure that baker.
+$B bake "$W/r100k.obj" -o "$W/r100k.vlf" -q
 $B rays "$W/r100k.vlf" --view outside --width 316 --height 316 -o "$W/outside.bin" -q
 $B rays "$W/r100k.vlf" --view inside --width 316 --height 316 -o "$W/inside.bin" -q
 
