@@ -9,6 +9,8 @@
 //! SSE2 (part of every x86-64) does for sixteen refs at once. [`pass_mask_scalar`] is the plain
 //! twin the tests hold it to, and what other targets use.
 
+use crate::prefetch::prefetch;
+use vlf_format::TriangleRecord;
 #[cfg(doc)]
 use vlf_format::block::Block;
 
@@ -65,15 +67,42 @@ pub(crate) struct Passing<'a> {
     group: usize,
     /// The refs of the current group that passed and are not yet returned.
     mask: u32,
+    /// Triangle records to start loading for each group of passing refs (empty: none).
+    load: &'a [TriangleRecord],
 }
 
 impl<'a> Passing<'a> {
-    /// The passing refs of the leaf of `len` refs whose bytes are `bytes` ([`Block::leaf_bytes`]).
+    /// The passing refs of the leaf of `len` refs whose bytes are `bytes` ([`Block::leaf_bytes`]);
+    /// as each group of sixteen is filtered, the records in `load` of its passing refs start
+    /// loading (pass `&[]` for no such hint).
     #[inline(always)]
-    pub(crate) fn new(bytes: &'a [u8], len: usize, limits: Limits) -> Self {
-        let mut p = Passing { bytes, len, limits, group: 0, mask: 0 };
+    pub(crate) fn new(bytes: &'a [u8], len: usize, limits: Limits, load: &'a [TriangleRecord]) -> Self {
+        let mut p = Passing { bytes, len, limits, group: 0, mask: 0, load };
         p.fill();
         p
+    }
+
+    /// The triangle id of ref `i`, if the leaf's bytes hold it.
+    #[inline(always)]
+    fn id(&self, i: usize) -> Option<u32> {
+        let at = 4 * (self.len + i);
+        Some(u32::from_le_bytes(self.bytes.get(at..at + 4)?.try_into().ok()?))
+    }
+
+    /// Starts loading the records of the current group's passing refs.
+    #[inline(always)]
+    fn load_group(&self) {
+        if self.load.is_empty() {
+            return;
+        }
+        let mut mask = self.mask;
+        while mask != 0 {
+            let i = self.group + mask.trailing_zeros() as usize;
+            mask &= mask - 1;
+            if let Some(record) = self.id(i).and_then(|id| self.load.get(id as usize)) {
+                prefetch(record);
+            }
+        }
     }
 
     /// Sixteen bytes of each box array from the current group on, 255 past the section's end.
@@ -108,6 +137,7 @@ impl<'a> Passing<'a> {
             let valid = if left >= 16 { 0xffff } else { (1u32 << left) - 1 };
             self.mask = pass_mask(&self.lanes(), self.limits) & valid;
             if self.mask != 0 {
+                self.load_group();
                 return;
             }
             self.group += 16;
@@ -129,8 +159,7 @@ impl Iterator for Passing<'_> {
             self.group += 16;
             self.fill();
         }
-        let at = 4 * (self.len + i);
-        Some(u32::from_le_bytes(self.bytes.get(at..at + 4)?.try_into().ok()?))
+        self.id(i)
     }
 }
 
@@ -182,13 +211,19 @@ mod tests {
                 let leaf = block.leaf(k).unwrap();
                 assert_eq!(leaf.len, range.len());
                 let got: Vec<u32> =
-                    Passing::new(block.leaf_bytes(leaf), leaf.len, limits(x[0], x[1], y[0], y[1])).collect();
+                    Passing::new(block.leaf_bytes(leaf), leaf.len, limits(x[0], x[1], y[0], y[1]), &[]).collect();
                 let want: Vec<u32> = refs[range]
                     .iter()
                     .filter(|r| r.x[0] <= x[1] && r.x[1] >= x[0] && r.y[0] <= y[1] && r.y[1] >= y[0])
                     .map(|r| r.id)
                     .collect();
                 assert_eq!(got, want);
+                // Loading the passing refs' triangles is only a hint: the same refs pass, whether
+                // the records exist for their ids or not.
+                let records = vec![TriangleRecord { v: [[0.0; 3]; 3] }; 150];
+                let loading: Vec<u32> =
+                    Passing::new(block.leaf_bytes(leaf), leaf.len, limits(x[0], x[1], y[0], y[1]), &records).collect();
+                assert_eq!(loading, want);
             }
         }
     }

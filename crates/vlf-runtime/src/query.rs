@@ -258,7 +258,8 @@ impl<'a> FieldView<'a> {
         let mut best = Closest::new(ray.tmax);
         let mut walk = Walk::new(&self.reader, &self.grid, &setup)?;
         while let Some(leaf) = walk.next_leaf(&self.grid, &setup, counter) {
-            if closest_in_refs(&tri_ray, tris, closest_refs(&leaf, &best), leaf.exit_t, &mut best, counter) {
+            let refs = leaf.passing_loading(lower(leaf.exit_t, best.tmax as f64), self.reader.triangles);
+            if closest_in_refs(&tri_ray, tris, refs, leaf.exit_t, &mut best, counter) {
                 break;
             }
         }
@@ -274,7 +275,8 @@ impl<'a> FieldView<'a> {
         let tri_ray = TriRay::relative(ray, origin);
         let mut walk = Walk::new(&self.reader, &self.grid, &setup)?;
         while let Some(leaf) = walk.next_leaf(&self.grid, &setup, counter) {
-            if let Some(hit) = tri_ray.any_in(tris, leaf.passing(leaf.exit_t), ray.tmax, counter) {
+            let refs = leaf.passing_loading(leaf.exit_t, self.reader.triangles);
+            if let Some(hit) = tri_ray.any_in(tris, refs, ray.tmax, counter) {
                 return Some(hit);
             }
         }

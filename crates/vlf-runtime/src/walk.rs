@@ -20,7 +20,7 @@
 use crate::filter::{Limits, Passing, limits};
 use crate::prefetch::prefetch;
 use vlf_format::block::{BOX_CELLS, Block};
-use vlf_format::{EMPTY_TILE, FieldReader};
+use vlf_format::{EMPTY_TILE, FieldReader, TriangleRecord};
 use vlf_geom::Counter;
 
 /// The smaller of an interval end `a` and `b`; a NaN `b` (a lying file) leaves `a`.
@@ -120,7 +120,15 @@ impl<'a> Leaf<'a> {
     /// leaf, or the part of it before the best hit so far), grown by the margin.
     #[inline(always)]
     pub(crate) fn passing(&self, t_far: f64) -> Passing<'a> {
-        Passing::new(self.bytes, self.len, self.ray.limits(self.enter_t, t_far))
+        Passing::new(self.bytes, self.len, self.ray.limits(self.enter_t, t_far), &[])
+    }
+
+    /// [`Self::passing`], starting to load the records in `triangles` of each group of passing
+    /// refs as soon as the group is found, so that their cache misses overlap (a single ray's
+    /// query; a batch overlaps them across rays instead).
+    #[inline(always)]
+    pub(crate) fn passing_loading(&self, t_far: f64, triangles: &'a [TriangleRecord]) -> Passing<'a> {
+        Passing::new(self.bytes, self.len, self.ray.limits(self.enter_t, t_far), triangles)
     }
 
     /// The triangle ids of all the leaf's refs, before the box test.
