@@ -100,7 +100,7 @@ impl<'a> FieldView<'a> {
             self.interleaved(
                 window,
                 |ray| Closest::new(ray.tmax),
-                |best, leaf| closest_refs(leaf, best),
+                |best, leaf| closest_refs(leaf, best, &[]),
                 |tri_ray, _, best, refs, exit_t| closest_in_refs(tri_ray, &tris, refs, exit_t, best, &mut ()),
                 |i, best| out(base + i, best.and_then(|b| b.hit)),
             );
@@ -133,7 +133,7 @@ impl<'a> FieldView<'a> {
             self.interleaved(
                 rays,
                 |_| None,
-                |_, leaf| leaf.passing(leaf.exit_t),
+                |_, leaf| leaf.passing(leaf.exit_t, &[]),
                 |tri_ray, ray, found, refs, _| {
                     *found = tri_ray.any_in(&tris, refs, ray.tmax, &mut ());
                     found.is_some()

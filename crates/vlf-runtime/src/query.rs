@@ -258,7 +258,7 @@ impl<'a> FieldView<'a> {
         let mut best = Closest::new(ray.tmax);
         let mut walk = Walk::new(&self.reader, &self.grid, &setup)?;
         while let Some(leaf) = walk.next_leaf(&self.grid, &setup, counter) {
-            let refs = leaf.passing_loading(lower(leaf.exit_t, best.tmax as f64), self.reader.triangles);
+            let refs = closest_refs(&leaf, &best, self.reader.triangles);
             if closest_in_refs(&tri_ray, tris, refs, leaf.exit_t, &mut best, counter) {
                 break;
             }
@@ -275,7 +275,7 @@ impl<'a> FieldView<'a> {
         let tri_ray = TriRay::relative(ray, origin);
         let mut walk = Walk::new(&self.reader, &self.grid, &setup)?;
         while let Some(leaf) = walk.next_leaf(&self.grid, &setup, counter) {
-            let refs = leaf.passing_loading(leaf.exit_t, self.reader.triangles);
+            let refs = leaf.passing(leaf.exit_t, self.reader.triangles);
             if let Some(hit) = tri_ray.any_in(tris, refs, ray.tmax, counter) {
                 return Some(hit);
             }
@@ -324,7 +324,7 @@ impl<'a> FieldView<'a> {
         let Some(setup) = self.setup(ray, self.center) else { return };
         let Some(mut walk) = Walk::new(&self.reader, &self.grid, &setup) else { return };
         while let Some(leaf) = walk.next_leaf(&self.grid, &setup, &mut ()) {
-            if visit(&|t_far| leaf.passing(t_far), leaf.exit_t) {
+            if visit(&|t_far| leaf.passing(t_far, &[]), leaf.exit_t) {
                 return;
             }
         }
@@ -332,10 +332,10 @@ impl<'a> FieldView<'a> {
 }
 
 /// The refs of `leaf` the closest-hit search tests: those whose boxes meet the ray over the
-/// part of the leaf before the best hit so far.
+/// part of the leaf before the best hit so far; `load` as for [`Leaf::passing`].
 #[inline(always)]
-pub(crate) fn closest_refs<'a>(leaf: &Leaf<'a>, best: &Closest) -> Passing<'a> {
-    leaf.passing(lower(leaf.exit_t, best.tmax as f64))
+pub(crate) fn closest_refs<'a>(leaf: &Leaf<'a>, best: &Closest, load: &'a [TriangleRecord]) -> Passing<'a> {
+    leaf.passing(lower(leaf.exit_t, best.tmax as f64), load)
 }
 
 /// Step 4 for the closest hit: tests `refs` ([`closest_refs`] of a leaf the ray leaves at

@@ -117,18 +117,13 @@ pub(crate) struct Leaf<'a> {
 
 impl<'a> Leaf<'a> {
     /// The ids of the leaf's refs whose boxes meet the ray's box over `[enter_t, t_far]` (the
-    /// leaf, or the part of it before the best hit so far), grown by the margin.
+    /// leaf, or the part of it before the best hit so far), grown by the margin. The records in
+    /// `load` of each group of passing refs start loading as soon as the group is found, so that
+    /// their cache misses overlap: a single ray's query passes the field's triangles, a batch
+    /// (which overlaps misses across rays instead) `&[]`.
     #[inline(always)]
-    pub(crate) fn passing(&self, t_far: f64) -> Passing<'a> {
-        Passing::new(self.bytes, self.len, self.ray.limits(self.enter_t, t_far), &[])
-    }
-
-    /// [`Self::passing`], starting to load the records in `triangles` of each group of passing
-    /// refs as soon as the group is found, so that their cache misses overlap (a single ray's
-    /// query; a batch overlaps them across rays instead).
-    #[inline(always)]
-    pub(crate) fn passing_loading(&self, t_far: f64, triangles: &'a [TriangleRecord]) -> Passing<'a> {
-        Passing::new(self.bytes, self.len, self.ray.limits(self.enter_t, t_far), triangles)
+    pub(crate) fn passing(&self, t_far: f64, load: &'a [TriangleRecord]) -> Passing<'a> {
+        Passing::new(self.bytes, self.len, self.ray.limits(self.enter_t, t_far), load)
     }
 
     /// The triangle ids of all the leaf's refs, before the box test.
