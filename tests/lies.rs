@@ -9,7 +9,9 @@
 //!   leaf count, a TILES entry, a direction's BEAMS record, its rotation, its LOOKUP entry, the
 //!   scene's radius, a triangle's vertices. Each answer
 //!   must be *sound* (a hit is a real hit on a stored triangle, never closer than the true closest;
-//!   an any-hit is a real hit) and each lie confined to the rays that use the lied-about direction.
+//!   an any-hit is a real hit) and each lie confined to the rays that use the lied-about direction;
+//! - [`a_lying_direction_vector_changes_only_lattices_past_the_fine_table`]: DIRECTIONS, which
+//!   only fields of more than 129 directions read.
 
 #![forbid(unsafe_code)]
 
@@ -136,6 +138,48 @@ fn put<T: bytemuck::Pod>(edits: &mut Edits, at: usize, value: T) {
     edits.push((at, bytemuck::bytes_of(&value).to_vec()));
 }
 
+/// A direction vector of NaNs in DIRECTIONS. Up to 129 directions the runtime picks a ray's
+/// direction from its own table and never reads DIRECTIONS, so every answer stays the honest one;
+/// past that it compares dot products with the stored vectors, and the rays along the lied-about
+/// direction take another one, with sound answers.
+#[test]
+fn a_lying_direction_vector_changes_only_lattices_past_the_fine_table() {
+    let scene = Scene::from_triangles("random", &generate::random_cube(400, 0.1, 4)).unwrap();
+    for (directions, read) in [(33, false), (513, true)] {
+        let (dir, honest) = vlf_tests::bake(&scene, directions, 8, DepthPolicy::default());
+        let mut bytes = std::fs::read(dir.path().join("scene.vlf")).unwrap();
+        let r = honest.reader();
+        let j = r.directions.len() / 2 + 1;
+        let w = r.directions[j];
+        let at = r.entry(SectionKind::Directions).unwrap().offset as usize + 16 * j;
+        bytes[at..at + 16].copy_from_slice(bytemuck::bytes_of(&[f32::NAN, f32::NAN, f32::NAN, 0.0]));
+        let field = Field::from_bytes(&bytes).unwrap();
+        let (c, radius) = honest.bounding_sphere();
+        let tris = vlf_tests::stored_triangles(&field);
+        // Rays along the direction, through the scene, and a frame from outside.
+        let mut rays: Vec<Ray> = (0..64)
+            .map(|i| {
+                let o: [f32; 3] = std::array::from_fn(|k| {
+                    (c[k] - 2.0 * radius * w[k] as f64 + 0.02 * radius * ((i * (k + 3)) % 17) as f64) as f32
+                });
+                Ray::new(o, [w[0], w[1], w[2]])
+            })
+            .collect();
+        rays.extend(Camera::outside(c, radius, 1.0).primary_rays(24, 24));
+        let mut changed = 0;
+        for ray in &rays {
+            let (got, any) = (field.closest_hit(ray), field.view().any_hit_counted(ray, &mut ()));
+            assert_sound("a direction of NaNs", &tris, field.origin(), ray, got, any);
+            changed += (candidates(&field, ray) != candidates(&honest, ray)) as usize;
+        }
+        if read {
+            assert!(changed > 0, "{directions} directions: no ray reads the lying direction");
+        } else {
+            assert_eq!(changed, 0, "{directions} directions: a ray reads DIRECTIONS");
+        }
+    }
+}
+
 #[test]
 fn targeted_lies_deep_inside_sections() {
     let scene = Scene::from_triangles("random", &generate::random_cube(400, 0.1, 4)).unwrap();
@@ -234,9 +278,6 @@ fn targeted_lies_deep_inside_sections() {
         lie("a rotation turned upside down", d, &|e| {
             let m = r.rotations[j];
             put(e, rotation_at, [m[0], m[1], m[2], -m[3], -m[4], -m[5], -m[6], -m[7], -m[8]]);
-        });
-        lie("a direction of NaNs", None, &|e| {
-            put(e, offset(SectionKind::Directions) + 16 * j, [f32::NAN, f32::NAN, f32::NAN, 0.0])
         });
         lie("a LOOKUP entry one past the last direction", None, &|e| put(e, lookup_at, l as u32));
         lie("a LOOKUP entry of 2^31 - 1", None, &|e| put(e, lookup_at, LOOKUP_FLIP - 1));
