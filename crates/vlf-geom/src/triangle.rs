@@ -72,7 +72,9 @@ impl TriRay {
             std::mem::swap(&mut kx, &mut ky);
         }
         let org = [kx, ky, kz].map(|i| ray.org[i] as f64 - origin[i]);
-        TriRay { org, k: [kx, ky, kz], sx: d[kx] / d[kz], sy: d[ky] / d[kz], sz: 1.0 / d[kz], tmin: ray.tmin as f64 }
+        // One division: the shear is a product with its reciprocal (as the paper's code does).
+        let sz = 1.0 / d[kz];
+        TriRay { org, k: [kx, ky, kz], sx: d[kx] * sz, sy: d[ky] * sz, sz, tmin: ray.tmin as f64 }
     }
 
     /// Tests one triangle; a hit must have `tmin ≤ t ≤ tmax`.
