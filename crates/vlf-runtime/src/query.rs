@@ -101,11 +101,11 @@ impl<'a> FieldView<'a> {
     /// (`formats/vlf.md` §5.3). Constant time: one division and two table reads. `None` only if
     /// the file's lookup table lies (points at no stored direction).
     ///
-    /// For lattices of up to [`FINE_MAX_N`] segments the nearest lattice point is read from
-    /// [`FINE`], which holds it for the centre of each square of `1/8` of a segment of the
-    /// octahedron's face (so the choice can differ from the exact one only for directions within
-    /// a sixteenth of a segment of the boundary between two lattice points, where both are about
-    /// as near); finer lattices take [`Self::nearest_lattice_point`].
+    /// For lattices of up to eight segments (129 directions) the nearest lattice point is read
+    /// from a table built into the runtime, which holds it for the centre of each square of `1/8`
+    /// of a segment of the octahedron's face (so the choice can differ from the exact one only
+    /// for directions near the boundary between two lattice points, where both are about as
+    /// near); finer lattices compare the dot products of the three nearest candidates.
     #[inline]
     pub fn select_direction(&self, d: [f64; 3]) -> Option<(usize, f64)> {
         let sigma = if d[2] < 0.0 { -1.0 } else { 1.0 };
@@ -375,7 +375,7 @@ pub(crate) fn closest_in_refs(
 
 /// Lattices of up to this many segments per octahedron edge (`2·8² + 1 = 129` directions) read
 /// their nearest lattice point from [`FINE`].
-pub const FINE_MAX_N: usize = 8;
+const FINE_MAX_N: usize = 8;
 
 /// Squares of [`FINE`] per lattice segment, along each axis of the octahedron's face.
 const FINE_CELLS: usize = 8;
