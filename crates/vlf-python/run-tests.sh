@@ -27,6 +27,21 @@ pip=("$venv/bin/python" -m pip --disable-pip-version-check)
 "${pip[@]}" install -q embreex || echo "python: embreex did not install; trimesh's Embree comparisons are skipped"
 if [ "${VLF_PY_OPEN3D:-1}" != 0 ]; then
     "${pip[@]}" install -q open3d || echo "python: open3d did not install; its comparisons are skipped"
+    # Open3D's wheel links system libraries a minimal machine may lack (libusb first of all). As
+    # root with apt, install them; otherwise, or if it still does not import, remove it, so that
+    # its comparisons are skipped instead of failing on the import.
+    o3d_imports() { "$venv/bin/python" -c "import open3d" >/dev/null 2>&1; }
+    if "${pip[@]}" show -q open3d >/dev/null 2>&1 && ! o3d_imports; then
+        if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null; then
+            echo "python: open3d does not import; installing the system libraries it links"
+            apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq \
+                libusb-1.0-0 libgomp1 libgl1 >/dev/null || true
+        fi
+        if ! o3d_imports; then
+            echo "python: open3d does not import here ($("$venv/bin/python" -c "import open3d" 2>&1 | tail -n 1)); its comparisons are skipped"
+            "${pip[@]}" uninstall -q -y open3d
+        fi
+    fi
 fi
 
 echo "python: building and installing crates/vlf-python (cargo profile $profile)"
