@@ -62,7 +62,7 @@ pub fn describe_text(d: &Description) -> String {
         human_bytes(d.max_bytes_per_triangle)
     ));
     line(format!("  margin        {:.3e} (world units)", d.margin));
-    line(format!("  worst angle   {:.3}° between a ray and its chosen direction", d.worst_direction_angle_deg));
+    line(format!("  worst angle   {:.3}° between a ray and its nearest direction", d.worst_direction_angle_deg));
     line("statistics".into());
     line(format!(
         "  triangles/tile mean {:.2} ({:.2} over non-empty tiles), max {}; {:.1}% of {} tiles empty",
