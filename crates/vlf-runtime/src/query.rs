@@ -33,6 +33,7 @@ use crate::walk::{Grid, Leaf, Setup, Walk, higher, lower};
 use vlf_format::block::BOX_CELLS;
 use vlf_format::{FieldReader, LOOKUP_FLIP, LOOKUP_NONE, TriangleRecord, Z_LEVELS};
 use vlf_geom::frame::mul;
+use vlf_geom::lattice;
 use vlf_geom::{Closest, Counter, Hit, Ray, TriRay, Triangles};
 
 /// The field's TRIANGLES section as the leaf kernel reads it.
@@ -119,7 +120,7 @@ impl<'a> FieldView<'a> {
             let [a, b] = fine_lattice_point(n as usize, u, v);
             (a as i64, b as i64)
         } else {
-            self.nearest_lattice_point(q, u, v)?
+            self.nearest_lattice_point(q)
         };
         let (sx, sy) = (if q[0] < 0.0 { -1 } else { 1 }, if q[1] < 0.0 { -1 } else { 1 });
         let side = 2 * n + 1;
@@ -131,39 +132,31 @@ impl<'a> FieldView<'a> {
         Some((j, if entry & LOOKUP_FLIP != 0 { -sigma } else { sigma }))
     }
 
-    /// The lattice point `(a, b)` (`a, b ≥ 0`) whose stored direction is nearest to `q` (`q.z ≥ 0`),
-    /// at `(u, v)` on the octahedron's face: of the three corners of the lattice triangle holding
-    /// `(u, v)`, the one with the largest dot product with `(|q.x|, |q.y|, q.z)`.
+    /// The lattice point `(a, b)` (`a, b ≥ 0`) whose stored direction is nearest to `q` (`q.z ≥ 0`):
+    /// of the candidates of §5.3 ([`lattice::candidates`]), the one whose direction in the file
+    /// has the largest dot product with `(|q.x|, |q.y|, q.z)`.
     #[inline]
-    fn nearest_lattice_point(&self, q: [f64; 3], u: f64, v: f64) -> Option<(i64, i64)> {
+    fn nearest_lattice_point(&self, q: [f64; 3]) -> (i64, i64) {
         let n = self.lattice_n as i64;
-        // Truncation is floor for these non-negative values (no libm call).
-        let (i, k) = (u as i64, v as i64);
-        let lower = (u - i as f64) + (v - k as f64) < 1.0;
-        let cells = if lower { [(i, k), (i + 1, k), (i, k + 1)] } else { [(i + 1, k), (i, k + 1), (i + 1, k + 1)] };
         let side = 2 * n + 1;
         let (ax, ay) = (q[0].abs(), q[1].abs());
-        let mut best = None;
+        let candidates = lattice::candidates(self.lattice_n, ax, ay, q[2]);
+        let mut best = candidates.as_slice()[0];
         let mut best_dot = f64::NEG_INFINITY;
-        for (ci, ck) in cells {
-            if ci + ck > n {
+        for &(ci, ck) in candidates.as_slice() {
+            let Some(&entry) = self.reader.lookup.get(((ck as i64 + n) * side + (ci as i64 + n)) as usize) else {
                 continue;
-            }
-            let Some(&entry) = self.reader.lookup.get(((ck + n) * side + (ci + n)) as usize) else { continue };
+            };
             let Some(w) = self.reader.directions.get((entry & !LOOKUP_FLIP) as usize) else { continue };
             // The first-quadrant lattice point's direction: the stored one, or its antipode.
             let s = if entry & LOOKUP_FLIP != 0 { -1.0 } else { 1.0 };
             let dot = s * (w[0] as f64 * ax + w[1] as f64 * ay + w[2] as f64 * q[2]);
             if entry != LOOKUP_NONE && dot > best_dot {
                 best_dot = dot;
-                best = Some((ci, ck));
+                best = (ci, ck);
             }
         }
-        // Only `None` through rounding at the rim: the clamped corner is a lattice point.
-        best.or_else(|| {
-            let ci = i.min(n);
-            Some((ci, k.min(n - ci)))
-        })
+        (best.0 as i64, best.1 as i64)
     }
 
     /// Steps 1 and 2 for a ray whose origin is given relative to `origin` (the world's origin for
