@@ -139,14 +139,18 @@ impl<'a> Block<'a> {
     /// than [`MAX_LEAVES`], or more bytes than `words` holds.
     #[inline]
     pub fn parse(words: &'a [u64]) -> Option<Block<'a>> {
+        // Words are 8-aligned, so their halves and quarters need no alignment check (the crate
+        // builds for little-endian targets only, as the format is).
         let bytes: &[u8] = bytemuck::cast_slice(words);
-        let k = u32::from_le_bytes(bytes.get(..4)?.try_into().ok()?);
+        let halves: &[u16] = bytemuck::cast_slice(words);
+        let quarters: &[u32] = bytemuck::cast_slice(words);
+        let k = *quarters.first()?;
         if k == 0 || k > MAX_LEAVES {
             return None;
         }
         let k = k as usize;
-        let bounds: &[u16] = try_cast_slice(bytes.get(4..4 + 2 * (k + 1))?).ok()?;
-        let ends: &[u32] = try_cast_slice(bytes.get(ends_offset(k)..header_bytes(k))?).ok()?;
+        let bounds = halves.get(2..k + 3)?;
+        let ends = quarters.get(ends_offset(k) / 4..header_bytes(k) / 4)?;
         let m = ends[k - 1] as usize;
         if header_bytes(k).checked_add(m.checked_mul(8)?)? > bytes.len() {
             return None;
