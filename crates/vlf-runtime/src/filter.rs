@@ -18,9 +18,55 @@ use vlf_format::block::Block;
 pub(crate) type Limits = [u8; 4];
 
 /// The limits for a ray box covering the cells `x_lo..=x_hi`, `y_lo..=y_hi`.
+#[cfg(any(test, not(target_arch = "x86_64")))]
 #[inline(always)]
 pub(crate) fn limits(x_lo: u8, x_hi: u8, y_lo: u8, y_hi: u8) -> Limits {
     [x_hi, 255 - x_lo, y_hi, 255 - y_lo]
+}
+
+/// The limits ([`limits`]) of the box of cells covering the segment from `a` to `b` (points in a
+/// tile's cells, `[x, y]`), grown by `margin` cells: the plain twin of [`segment_limits`].
+///
+/// Each bound is clamped to `[0, 255]` and truncated to its cell. The minimum and maximum are
+/// those of SSE2 (`minpd`, `maxpd`: the second operand when the comparison fails, a NaN among
+/// them), so that the two twins agree on every input; a NaN from a lying file gives some valid
+/// limits, never a panic.
+#[cfg(any(test, not(target_arch = "x86_64")))]
+#[inline(always)]
+pub(crate) fn segment_limits_scalar(a: [f64; 2], b: [f64; 2], margin: f64) -> Limits {
+    let min = |p: f64, q: f64| if p < q { p } else { q };
+    let max = |p: f64, q: f64| if p > q { p } else { q };
+    let cell = |v: f64| min(max(v, 0.0), 255.0) as u8;
+    let lo = |i: usize| cell(min(a[i], b[i]) - margin);
+    let hi = |i: usize| cell(max(a[i], b[i]) + margin);
+    limits(lo(0), hi(0), lo(1), hi(1))
+}
+
+/// [`segment_limits_scalar`], both axes per instruction.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+pub(crate) fn segment_limits(a: [f64; 2], b: [f64; 2], margin: f64) -> Limits {
+    use std::arch::x86_64::*;
+    // SAFETY: these intrinsics need SSE2, which every x86-64 CPU has (it is in the target's
+    // baseline features); they read and write only their register arguments.
+    unsafe {
+        let (a, b) = (_mm_set_pd(a[1], a[0]), _mm_set_pd(b[1], b[0]));
+        let mu = _mm_set1_pd(margin);
+        let cells = |v: __m128d| _mm_cvttpd_epi32(_mm_min_pd(_mm_max_pd(v, _mm_setzero_pd()), _mm_set1_pd(255.0)));
+        let lo = cells(_mm_sub_pd(_mm_min_pd(a, b), mu));
+        let hi = cells(_mm_add_pd(_mm_max_pd(a, b), mu));
+        // [x_hi, 255 − x_lo, y_hi, 255 − y_lo] as four i32, then as four bytes (all in 0..=255).
+        let words = _mm_unpacklo_epi32(hi, _mm_sub_epi32(_mm_set1_epi32(255), lo));
+        let bytes = _mm_packus_epi16(_mm_packs_epi32(words, words), _mm_setzero_si128());
+        (_mm_cvtsi128_si32(bytes) as u32).to_le_bytes()
+    }
+}
+
+/// [`segment_limits_scalar`] on targets without a vector twin.
+#[cfg(not(target_arch = "x86_64"))]
+#[inline(always)]
+pub(crate) fn segment_limits(a: [f64; 2], b: [f64; 2], margin: f64) -> Limits {
+    segment_limits_scalar(a, b, margin)
 }
 
 /// Bit `i` set if ref `i` of the sixteen in `lanes` (one array per box bound) passes: the plain
@@ -188,6 +234,26 @@ mod tests {
             let limits = [l[0], l[1], l[2], l[3]];
             assert_eq!(pass_mask(&lanes, limits), pass_mask_scalar(&lanes, limits));
         }
+    }
+
+    #[test]
+    fn the_vector_segment_limits_are_the_scalar_ones() {
+        let mut next = rng(13);
+        // Cells in and around a tile, some far outside, and the values a lying file can give.
+        let specials = [f64::NAN, f64::INFINITY, f64::NEG_INFINITY, -0.0, 0.0, 255.0, 255.5, 256.0, -1e300, 1e300];
+        let mut value = move || match next() % 8 {
+            0 => specials[(next() % specials.len() as u64) as usize],
+            1 => (next() % 600) as f64 - 300.0,
+            _ => (next() % (1 << 20)) as f64 / 2048.0 - 128.0,
+        };
+        for _ in 0..200_000 {
+            let (a, b, margin) = ([value(), value()], [value(), value()], value().abs() / 64.0);
+            assert_eq!(segment_limits(a, b, margin), segment_limits_scalar(a, b, margin), "{a:?} {b:?} {margin}");
+        }
+        // The cells of a segment inside the tile, grown by the margin: x over cells 10..=40 and y
+        // over 3..=254 (clamped).
+        assert_eq!(segment_limits_scalar([40.5, 3.5], [10.5, 300.0], 0.25), limits(10, 40, 3, 255));
+        assert_eq!(segment_limits([40.5, 3.5], [10.5, 300.0], 0.25), limits(10, 40, 3, 255));
     }
 
     #[test]

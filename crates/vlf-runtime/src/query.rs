@@ -29,7 +29,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use crate::filter::Passing;
-use crate::walk::{Grid, Leaf, Setup, Walk, higher, lower};
+use crate::walk::{Grid, Leaf, Setup, higher, lower, walk_leaves};
 use vlf_format::block::BOX_CELLS;
 use vlf_format::{FieldReader, LOOKUP_FLIP, LOOKUP_NONE, TriangleRecord, Z_LEVELS};
 use vlf_geom::frame::mul;
@@ -256,7 +256,7 @@ impl<'a> FieldView<'a> {
 
     /// The closest hit of a ray given relative to `origin`, with the triangles read through
     /// `tris`: steps 1 to 5.
-    #[inline(always)]
+    #[inline(never)]
     fn closest_with(
         &self,
         ray: &Ray,
@@ -268,31 +268,27 @@ impl<'a> FieldView<'a> {
         counter.ray();
         let tri_ray = TriRay::relative(ray, origin);
         let mut best = Closest::new(ray.tmax);
-        let mut walk = Walk::new(&self.reader, &self.grid, &setup)?;
-        while let Some(leaf) = walk.next_leaf(&self.grid, &setup, counter) {
-            let refs = closest_refs(&leaf, &best, self.reader.triangles);
-            if closest_in_refs(&tri_ray, tris, refs, leaf.exit_t, &mut best, counter) {
-                break;
-            }
-        }
+        walk_leaves(&self.reader, &self.grid, &setup, counter, |leaf, counter| {
+            let refs = closest_refs(leaf, &best, self.reader.triangles);
+            closest_in_refs(&tri_ray, tris, refs, leaf.exit_t, &mut best, counter)
+        });
         best.hit
     }
 
     /// The first hit found of a ray given relative to `origin`, with the triangles read through
     /// `tris`.
-    #[inline(always)]
+    #[inline(never)]
     fn any_with(&self, ray: &Ray, origin: [f64; 3], tris: &impl Triangles, counter: &mut impl Counter) -> Option<Hit> {
         let setup = self.setup(ray, origin)?;
         counter.ray();
         let tri_ray = TriRay::relative(ray, origin);
-        let mut walk = Walk::new(&self.reader, &self.grid, &setup)?;
-        while let Some(leaf) = walk.next_leaf(&self.grid, &setup, counter) {
+        let mut found = None;
+        walk_leaves(&self.reader, &self.grid, &setup, counter, |leaf, counter| {
             let refs = leaf.passing(leaf.exit_t, self.reader.triangles);
-            if let Some(hit) = tri_ray.any_in(tris, refs, ray.tmax, counter) {
-                return Some(hit);
-            }
-        }
-        None
+            found = tri_ray.any_in(tris, refs, ray.tmax, counter);
+            found.is_some()
+        });
+        found
     }
 
     /// [`Self::closest_hit_local`] with the triangles read through `tris` instead of the field's
@@ -316,12 +312,7 @@ impl<'a> FieldView<'a> {
     /// the box and triangle tests.
     pub fn for_each_leaf(&self, ray: &Ray, counter: &mut impl Counter, mut visit: impl FnMut(&[u32], f64) -> bool) {
         let Some(setup) = self.setup(ray, self.center) else { return };
-        let Some(mut walk) = Walk::new(&self.reader, &self.grid, &setup) else { return };
-        while let Some(leaf) = walk.next_leaf(&self.grid, &setup, counter) {
-            if visit(leaf.ids(), leaf.exit_t) {
-                return;
-            }
-        }
+        walk_leaves(&self.reader, &self.grid, &setup, counter, |leaf, _| visit(leaf.ids(), leaf.exit_t));
     }
 
     /// The walk of the all-hits query (`crate::all_hits`): calls `visit(passing, exit_t)` for each
@@ -334,12 +325,9 @@ impl<'a> FieldView<'a> {
         mut visit: impl FnMut(&dyn Fn(f64) -> Passing<'a>, f64) -> bool,
     ) {
         let Some(setup) = self.setup(ray, self.center) else { return };
-        let Some(mut walk) = Walk::new(&self.reader, &self.grid, &setup) else { return };
-        while let Some(leaf) = walk.next_leaf(&self.grid, &setup, &mut ()) {
-            if visit(&|t_far| leaf.passing(t_far, &[]), leaf.exit_t) {
-                return;
-            }
-        }
+        walk_leaves(&self.reader, &self.grid, &setup, &mut (), |leaf, _| {
+            visit(&|t_far| leaf.passing(t_far, &[]), leaf.exit_t)
+        });
     }
 }
 

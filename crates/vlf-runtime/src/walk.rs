@@ -1,12 +1,13 @@
-//! Steps 3 and 4 of the query ([`crate::query`]) as a cursor: the tiles a ray's projection
-//! crosses, front to back (Amanatides and Woo 1987 in the tile grid), and in each the leaves of
-//! its block (`formats/vlf.md` §5.6) that the ray's z range passes through, in ray order.
+//! Steps 3 and 4 of the query ([`crate::query`]): the tiles a ray's projection crosses, front to
+//! back (Amanatides and Woo 1987 in the tile grid), and in each the leaves of its block
+//! (`formats/vlf.md` §5.6) that the ray's z range passes through, in ray order.
 //!
-//! The walk is a resumable state machine rather than a loop, so that one ray can be advanced a
-//! step at a time: a single query runs it to the next leaf at once ([`Walk::next_leaf`]), while
-//! a batch ([`crate::batch`]) advances several rays in turn and starts loading what each one
-//! needs next before coming back to it, so that their cache misses overlap. Both see the same
-//! leaves in the same order, so they give the same answers.
+//! The walk comes in two forms over the same parts (the grid step [`Dda`], a direction's tiles
+//! [`Beam`], a tile's leaves [`Tile`]): a single query runs it as plain loops
+//! ([`walk_leaves`]), whose state the compiler keeps in registers; a batch ([`crate::batch`])
+//! runs it as a resumable cursor ([`Walk`]), so that it can advance several rays in turn and start
+//! loading what each one needs next before coming back to it, and their cache misses overlap.
+//! Both see the same tiles and leaves in the same order, so they give the same answers.
 //!
 //! Geometry here is in f64: its rounding stays far below the margin `μ` by which the baker grew
 //! every footprint, z range and box (`formats/vlf.md` §6.2). Every index read from the file is
@@ -17,7 +18,7 @@
 // branch.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
-use crate::filter::{Limits, Passing, limits};
+use crate::filter::{Limits, Passing, segment_limits};
 use crate::prefetch::prefetch;
 use vlf_format::block::{BOX_CELLS, Block};
 use vlf_format::{EMPTY_TILE, FieldReader, TriangleRecord};
@@ -86,19 +87,13 @@ struct CellRay {
 }
 
 impl CellRay {
-    /// The limits of the box of cells the ray passes over `[t_a, t_b]`, grown by the margin.
+    /// The limits of the box of cells the ray passes over `[t_a, t_b]`, grown by the margin
+    /// (bounds below cell 0 give cell 0, above 255 cell 255).
     #[inline(always)]
     fn limits(&self, t_a: f64, t_b: f64) -> Limits {
-        // Casts saturate: below 0 gives cell 0, above 255 cell 255 (and a NaN from a lying file
-        // cell 0).
         const _: () = assert!(BOX_CELLS == 256, "cells are u8");
-        let cell = |v: f64| v as u8;
-        let (o, d, mu) = (self.o, self.d, self.margin);
-        let (xa, xb) = (o[0] + t_a * d[0], o[0] + t_b * d[0]);
-        let (ya, yb) = (o[1] + t_a * d[1], o[1] + t_b * d[1]);
-        let (x_lo, x_hi) = if xa < xb { (xa, xb) } else { (xb, xa) };
-        let (y_lo, y_hi) = if ya < yb { (ya, yb) } else { (yb, ya) };
-        limits(cell(x_lo - mu), cell(x_hi + mu), cell(y_lo - mu), cell(y_hi + mu))
+        let (o, d) = (self.o, self.d);
+        segment_limits([o[0] + t_a * d[0], o[1] + t_a * d[1]], [o[0] + t_b * d[0], o[1] + t_b * d[1]], self.margin)
     }
 }
 
@@ -223,14 +218,6 @@ impl<'a> Tile<'a> {
             let exit_t =
                 if last { self.hi } else { lower(s.t_at(bounds[if s.up { leaf + 1 } else { leaf }]), self.hi) };
             counter.leaf();
-            // Start loading the next leaf's boxes while this one is tested.
-            if !last {
-                if let Some(next) = self.block.leaf(if s.up { leaf + 1 } else { leaf - 1 }) {
-                    if let Some(b) = self.block.leaf_bytes(next).first() {
-                        prefetch(b);
-                    }
-                }
-            }
             let refs = self.block.leaf(leaf).filter(|r| !r.is_empty());
             let enter_t = self.leaf_enter;
             if last || exit_t >= self.hi {
@@ -274,17 +261,10 @@ pub(crate) fn entry_leaf(inner: &[u16], q: f64, up: bool) -> usize {
     inner.iter().fold(0u16, |n, &b| n.wrapping_add((b <= last) as u16)) as usize
 }
 
-/// A ray's walk through the field: the tiles its projection crosses and their leaves, front to
-/// back.
+/// The tile grid walk of one ray (Amanatides and Woo 1987): the tile it is in, the parameters
+/// of the next tile boundary on each axis, and the steps between boundaries.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct Walk<'a> {
-    tiles: &'a [u32],
-    leaves: &'a [u64],
-    /// The direction's first word in LEAVES, and its first entry in TILES.
-    leaves_base: usize,
-    tiles_of_dir: usize,
-    /// The current tile, the parameters of the next tile boundary on each axis, and the steps
-    /// between boundaries.
+struct Dda {
     ix: i64,
     iy: i64,
     step_x: i64,
@@ -293,21 +273,18 @@ pub(crate) struct Walk<'a> {
     next_y: f64,
     delta_x: f64,
     delta_y: f64,
-    /// The parameter range of the ray over the current tile.
+    /// The parameter range of the ray over the current tile (`t_exit` once [`Dda::enter`]ed).
     t_enter: f64,
     t_exit: f64,
     /// Tile visits left: each step moves one axis monotonically, so `2n + 1` visits cover any
     /// segment.
     visits_left: usize,
-    state: State<'a>,
 }
 
-impl<'a> Walk<'a> {
-    /// The walk of the ray `s` through the field of `reader`, or `None` if the file has no
-    /// beam for its direction (a lying file).
+impl Dda {
+    /// The walk of `s` from the tile holding its entry point.
     #[inline(always)]
-    pub(crate) fn new(reader: &FieldReader<'a>, g: &Grid, s: &Setup) -> Option<Self> {
-        let beam = reader.beams.get(s.dir)?;
+    fn new(g: &Grid, s: &Setup) -> Self {
         let n = g.n as i64;
         let (w, r) = (g.tile_width, g.radius);
         // Tile coordinates of the entry point, clamped: the grown scene pokes out of the grid by
@@ -330,11 +307,7 @@ impl<'a> Walk<'a> {
         };
         let (step_x, next_x, delta_x) = axis(ix, s.o[0], s.d[0]);
         let (step_y, next_y, delta_y) = axis(iy, s.o[1], s.d[1]);
-        Some(Walk {
-            tiles: reader.tiles,
-            leaves: reader.leaves,
-            leaves_base: beam.leaves_base as usize,
-            tiles_of_dir: g.n * g.n * s.dir,
+        Dda {
             ix,
             iy,
             step_x,
@@ -346,17 +319,173 @@ impl<'a> Walk<'a> {
             t_enter: s.t0,
             t_exit: s.t0,
             visits_left: 2 * g.n + 1,
-            state: State::Seek,
+        }
+    }
+
+    /// Enters the current tile: sets `t_exit`; `false` if the visits are used up (only a lying
+    /// file's non-finite values get there).
+    #[inline(always)]
+    fn enter(&mut self, s: &Setup) -> bool {
+        if self.visits_left == 0 {
+            return false;
+        }
+        self.visits_left -= 1;
+        self.t_exit = lower(lower(self.next_x, self.next_y), s.t1);
+        true
+    }
+
+    /// The tile after the current one, if the ray goes on past this tile (it may lie outside the
+    /// grid).
+    #[inline(always)]
+    fn ahead(&self, s: &Setup) -> Option<(i64, i64)> {
+        if !(self.t_exit < s.t1) {
+            return None;
+        }
+        Some(if self.next_x <= self.next_y {
+            (self.ix + self.step_x, self.iy)
+        } else {
+            (self.ix, self.iy + self.step_y)
         })
     }
 
-    /// The next leaf with refs along the ray, or `None` at the end of the walk.
+    /// Moves to the next tile along the ray; `false` at the end of the ray's segment or of the
+    /// grid.
     #[inline(always)]
-    pub(crate) fn next_leaf(&mut self, g: &Grid, s: &Setup, counter: &mut impl Counter) -> Option<Leaf<'a>> {
-        match self.advance::<false>(g, s, counter) {
-            Step::Leaf(leaf) => Some(leaf),
-            Step::Wait | Step::End => None,
+    fn leave(&mut self, g: &Grid, s: &Setup) -> bool {
+        let n = g.n as i64;
+        if self.t_exit >= s.t1 {
+            return false;
         }
+        if self.next_x <= self.next_y {
+            self.ix += self.step_x;
+            self.t_enter = self.next_x;
+            self.next_x += self.delta_x;
+        } else {
+            self.iy += self.step_y;
+            self.t_enter = self.next_y;
+            self.next_y += self.delta_y;
+        }
+        (0..n).contains(&self.ix) && (0..n).contains(&self.iy)
+    }
+
+    /// The corner `(x, y)` of the current tile in the direction's frame.
+    #[inline(always)]
+    fn corner(&self, g: &Grid) -> [f64; 2] {
+        let (w, r) = (g.tile_width, g.radius);
+        [-r + self.ix as f64 * w, -r + self.iy as f64 * w]
+    }
+}
+
+/// The TILES and LEAVES of one direction: where a walk finds its tiles' blocks.
+#[derive(Clone, Copy, Debug)]
+struct Beam<'a> {
+    tiles: &'a [u32],
+    leaves: &'a [u64],
+    /// The direction's first word in LEAVES, and its first entry in TILES.
+    leaves_base: usize,
+    tiles_of_dir: usize,
+}
+
+impl<'a> Beam<'a> {
+    /// The beam of the ray `s`'s direction, or `None` if the file has none (a lying file).
+    #[inline(always)]
+    fn new(reader: &FieldReader<'a>, g: &Grid, s: &Setup) -> Option<Self> {
+        let beam = reader.beams.get(s.dir)?;
+        Some(Beam {
+            tiles: reader.tiles,
+            leaves: reader.leaves,
+            leaves_base: beam.leaves_base as usize,
+            tiles_of_dir: g.n * g.n * s.dir,
+        })
+    }
+
+    /// The TILES entry of tile `(x, y)` (inside the grid) of the direction, if the file has it.
+    #[inline(always)]
+    fn entry(&self, g: &Grid, x: i64, y: i64) -> Option<u32> {
+        self.tiles.get(self.tiles_of_dir + y as usize * g.n + x as usize).copied()
+    }
+
+    /// The word of LEAVES where the block of a non-empty tile's `entry` starts.
+    #[inline(always)]
+    fn block_at(&self, entry: u32) -> Option<usize> {
+        (entry != EMPTY_TILE).then(|| self.leaves_base.wrapping_add(entry as usize))
+    }
+
+    /// The TILES entry of the tile `ahead`, if there is one and it is in the grid.
+    #[inline(always)]
+    fn ahead_entry(&self, g: &Grid, ahead: Option<(i64, i64)>) -> Option<u32> {
+        let n = g.n as i64;
+        let (x, y) = ahead?;
+        if (0..n).contains(&x) && (0..n).contains(&y) { self.entry(g, x, y) } else { None }
+    }
+
+    /// Starts loading the block of the tile `ahead` (if it is in the grid and not empty).
+    #[inline(always)]
+    fn prefetch_block(&self, g: &Grid, ahead: Option<(i64, i64)>) {
+        if let Some(word) = self.ahead_entry(g, ahead).and_then(|e| self.block_at(e)).and_then(|at| self.leaves.get(at))
+        {
+            prefetch(word);
+        }
+    }
+
+    /// The leaves of the block at word `at` that the ray `s` reaches over the current tile of
+    /// `dda`, or `None` if the block does not parse or the ray misses its z range.
+    #[inline(always)]
+    fn tile(&self, at: usize, g: &Grid, s: &Setup, dda: &Dda) -> Option<Tile<'a>> {
+        let block = Block::parse(self.leaves.get(at..)?)?;
+        Tile::new(block, dda.corner(g), g, s, dda.t_enter, dda.t_exit)
+    }
+}
+
+/// Runs the walk of the ray `s` through the field of `reader` to its end, handing each leaf with
+/// refs to `visit` front to back, until `visit` returns `true`: the single-ray form of [`Walk`],
+/// written as plain loops so that its state stays in registers. It sees the same tiles and leaves
+/// in the same order as a [`Walk`], and counts the same work.
+#[inline(always)]
+pub(crate) fn walk_leaves<'a, C: Counter>(
+    reader: &FieldReader<'a>,
+    g: &Grid,
+    s: &Setup,
+    counter: &mut C,
+    mut visit: impl FnMut(&Leaf<'a>, &mut C) -> bool,
+) {
+    let Some(beam) = Beam::new(reader, g, s) else { return };
+    let mut dda = Dda::new(g, s);
+    while dda.enter(s) {
+        counter.cell();
+        // Start loading the next tile's block while this one is visited.
+        beam.prefetch_block(g, dda.ahead(s));
+        if let Some(at) = beam.entry(g, dda.ix, dda.iy).and_then(|e| beam.block_at(e)) {
+            if let Some(mut tile) = beam.tile(at, g, s, &dda) {
+                while let Some(leaf) = tile.next(s, counter) {
+                    if visit(&leaf, counter) {
+                        return;
+                    }
+                }
+            }
+        }
+        if !dda.leave(g, s) {
+            return;
+        }
+    }
+}
+
+/// A ray's walk through the field as a resumable cursor: the tiles its projection crosses and
+/// their leaves, front to back, a step at a time ([`Walk::step`]), for the batches that advance
+/// several rays in turn.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Walk<'a> {
+    beam: Beam<'a>,
+    dda: Dda,
+    state: State<'a>,
+}
+
+impl<'a> Walk<'a> {
+    /// The walk of the ray `s` through the field of `reader`, or `None` if the file has no
+    /// beam for its direction (a lying file).
+    #[inline(always)]
+    pub(crate) fn new(reader: &FieldReader<'a>, g: &Grid, s: &Setup) -> Option<Self> {
+        Some(Walk { beam: Beam::new(reader, g, s)?, dda: Dda::new(g, s), state: State::Seek })
     }
 
     /// One step: a leaf, or a move that started loading something the next step reads (the
@@ -364,65 +493,32 @@ impl<'a> Walk<'a> {
     /// other work while the load is under way.
     #[inline(always)]
     pub(crate) fn step(&mut self, g: &Grid, s: &Setup, counter: &mut impl Counter) -> Step<'a> {
-        self.advance::<true>(g, s, counter)
-    }
-
-    /// The TILES entry of tile `(x, y)` of the ray's direction, if the file has it.
-    #[inline(always)]
-    fn entry(&self, g: &Grid, x: i64, y: i64) -> Option<u32> {
-        self.tiles.get(self.tiles_of_dir + y as usize * g.n + x as usize).copied()
-    }
-
-    /// Moves on to the next leaf with refs, or the end; with `PAUSE`, returns [`Step::Wait`]
-    /// after each move that started a load.
-    #[inline(always)]
-    fn advance<const PAUSE: bool>(&mut self, g: &Grid, s: &Setup, counter: &mut impl Counter) -> Step<'a> {
         loop {
             match self.state {
                 State::Seek => {
                     self.state = State::Enter;
-                    if !PAUSE {
-                        continue;
-                    }
-                    if let Some(entry) = self.tiles.get(self.tiles_of_dir + self.iy as usize * g.n + self.ix as usize) {
+                    if let Some(entry) =
+                        self.beam.tiles.get(self.beam.tiles_of_dir + self.dda.iy as usize * g.n + self.dda.ix as usize)
+                    {
                         prefetch(entry);
                     }
                 }
                 State::Enter => {
-                    if self.visits_left == 0 {
+                    if !self.dda.enter(s) {
                         self.state = State::End;
                         return Step::End;
                     }
-                    self.visits_left -= 1;
-                    self.t_exit = lower(lower(self.next_x, self.next_y), s.t1);
                     counter.cell();
-                    let n = g.n as i64;
                     // Start loading the next tile's block while this one is visited.
-                    if self.t_exit < s.t1 {
-                        let (nx, ny) = if self.next_x <= self.next_y {
-                            (self.ix + self.step_x, self.iy)
-                        } else {
-                            (self.ix, self.iy + self.step_y)
-                        };
-                        if (0..n).contains(&nx) && (0..n).contains(&ny) {
-                            if let Some(next) = self.entry(g, nx, ny) {
-                                if let Some(word) = self.leaves.get(self.leaves_base.wrapping_add(next as usize)) {
-                                    prefetch(word);
-                                }
-                            }
-                        }
-                    }
-                    match self.entry(g, self.ix, self.iy) {
-                        Some(entry) if entry != EMPTY_TILE => {
-                            let at = self.leaves_base.wrapping_add(entry as usize);
-                            if PAUSE {
-                                if let Some(word) = self.leaves.get(at) {
-                                    prefetch(word);
-                                }
+                    self.beam.prefetch_block(g, self.dda.ahead(s));
+                    match self.beam.entry(g, self.dda.ix, self.dda.iy).and_then(|e| self.beam.block_at(e)) {
+                        Some(at) => {
+                            if let Some(word) = self.beam.leaves.get(at) {
+                                prefetch(word);
                             }
                             self.state = State::Open(at);
                         }
-                        _ => {
+                        None => {
                             if !self.leave_tile(g, s) {
                                 return Step::End;
                             }
@@ -431,14 +527,7 @@ impl<'a> Walk<'a> {
                     }
                 }
                 State::Open(at) => {
-                    let (w, r) = (g.tile_width, g.radius);
-                    let corner = [-r + self.ix as f64 * w, -r + self.iy as f64 * w];
-                    let tile = self
-                        .leaves
-                        .get(at..)
-                        .and_then(Block::parse)
-                        .and_then(|block| Tile::new(block, corner, g, s, self.t_enter, self.t_exit));
-                    match tile {
+                    match self.beam.tile(at, g, s, &self.dda) {
                         Some(tile) => self.state = State::Leaves(tile),
                         None => {
                             if !self.leave_tile(g, s) {
@@ -459,9 +548,7 @@ impl<'a> Walk<'a> {
                 },
                 State::End => return Step::End,
             }
-            if PAUSE {
-                return Step::Wait;
-            }
+            return Step::Wait;
         }
     }
 
@@ -469,26 +556,13 @@ impl<'a> Walk<'a> {
     /// segment or of the grid.
     #[inline(always)]
     fn leave_tile(&mut self, g: &Grid, s: &Setup) -> bool {
-        let n = g.n as i64;
-        if self.t_exit >= s.t1 {
-            self.state = State::End;
-            return false;
-        }
-        if self.next_x <= self.next_y {
-            self.ix += self.step_x;
-            self.t_enter = self.next_x;
-            self.next_x += self.delta_x;
+        if self.dda.leave(g, s) {
+            self.state = State::Seek;
+            true
         } else {
-            self.iy += self.step_y;
-            self.t_enter = self.next_y;
-            self.next_y += self.delta_y;
-        }
-        if !(0..n).contains(&self.ix) || !(0..n).contains(&self.iy) {
             self.state = State::End;
-            return false;
+            false
         }
-        self.state = State::Seek;
-        true
     }
 }
 
