@@ -35,10 +35,13 @@ const SAMPLE_DIRECTIONS: usize = 8;
 
 /// The ladder of automatic (lattice N, tiles n) rungs, coarse to fine, from the format 2.0 sweep
 /// (`docs/benchmarks/parameters.md`): 32² tiles are slow everywhere and hardly smaller than 64²;
-/// at 64² tiles more directions shorten the walk; finer settings (33 × 128² and beyond) are over
-/// the default allowance at every scale measured. So the ladder refines tiles to 64² on 9
-/// directions first, then adds directions up to 33; explicit `--tiles`/`--directions` go further.
-pub const LADDER: [(u32, u32); 5] = [(2, 16), (2, 32), (2, 64), (3, 64), (4, 64)];
+/// at 64² tiles more directions shorten the walk. So the ladder refines tiles to 64² on 9
+/// directions first, then adds directions. It went up to 33 while fields were larger; today's
+/// fields of the 100K random scene of shrinking triangles fit 51 × 64² (905 B per triangle) and
+/// trace primary rays 7–16% faster there than at 33 × 64², incoherent ones as fast
+/// (`docs/benchmarks/parameters.md`, 2026-12-02), so the ladder goes on to 51 and 73 directions
+/// and the budget stops it.
+pub const LADDER: [(u32, u32); 7] = [(2, 16), (2, 32), (2, 64), (3, 64), (4, 64), (5, 64), (6, 64)];
 
 /// Triangles per non-empty tile above which the automatic choice refines the ladder's tiles to
 /// [`DENSE_TILES`], if that fits the budget. Measured (`docs/benchmarks/parameters.md`): on the
@@ -49,6 +52,13 @@ pub const DENSE_TILE_LOAD: f64 = 400.0;
 
 /// The tiles per side that dense tiles are refined to.
 pub const DENSE_TILES: u32 = 128;
+
+/// The fewest directions (lattice N = 4: 33) that dense tiles are refined on when the ladder
+/// climbed past them and its own rung does not fit with finer tiles. Measured on the dragon
+/// (`docs/benchmarks/parameters.md`, 2026-12-02): 51 × 128² traced primary and shadow rays 2–9%
+/// faster than 33 × 128², and 33 × 128² was the best of the earlier ladder's; fewer directions
+/// at finer tiles were not compared with the ladder's rung above them.
+pub const DENSE_MIN_LATTICE: u32 = 4;
 
 pub use vlf_raster::{DEFAULT_LEAF_SIZE, DEFAULT_MAX_DEPTH, DepthPolicy};
 
@@ -296,16 +306,24 @@ pub fn choose<M: Measure>(scene: &M, config: &BakeConfig) -> Result<Choice, M::E
     }
     // Dense tiles: the leaves of a tile that holds hundreds of triangles are long lists, and a
     // ray that reaches a surface tests them all. Automatic parameters refine such tiles to
-    // DENSE_TILES when that fits the budget too (docs/benchmarks/parameters.md).
+    // DENSE_TILES when that fits the budget too (docs/benchmarks/parameters.md): on the
+    // directions the ladder reached or, if that is too large, on fewer, down to
+    // DENSE_MIN_LATTICE: finer tiles matter more to dense scenes than the last rungs of directions.
     if let (None, None, Some((p, _, load))) = (explicit_n, config.tiles, chosen) {
-        if load > DENSE_TILE_LOAD
-            && p.tiles < DENSE_TILES
-            && lower_bound_bytes(tris, p.lattice_n, DENSE_TILES) <= auto_budget
-        {
-            let finer = params_for(scene.radius(), p.lattice_n, DENSE_TILES, config.depth);
-            let (bytes, load) = estimate(scene, &finer)?;
-            if bytes <= auto_budget {
-                chosen = Some((finer, bytes, load));
+        if load > DENSE_TILE_LOAD && p.tiles < DENSE_TILES {
+            let reached = rungs.iter().rev().filter(|&&(ln, t)| {
+                t == p.tiles && (ln == p.lattice_n || (DENSE_MIN_LATTICE..p.lattice_n).contains(&ln))
+            });
+            for &(lattice_n, _) in reached {
+                if lower_bound_bytes(tris, lattice_n, DENSE_TILES) > auto_budget {
+                    continue;
+                }
+                let finer = params_for(scene.radius(), lattice_n, DENSE_TILES, config.depth);
+                let (bytes, load) = estimate(scene, &finer)?;
+                if bytes <= auto_budget {
+                    chosen = Some((finer, bytes, load));
+                    break;
+                }
             }
         }
     }
@@ -359,12 +377,13 @@ mod tests {
     use super::*;
     use std::cell::RefCell;
 
-    /// A scene whose directions cost what a model says: `16 n² + b T + 200` bytes per direction
-    /// (above the lower bound, as real directions are; `b` = 8 unless said), and `T / n²`
-    /// triangles per non-empty tile (at least one). Records every rung it is asked about.
+    /// A scene whose directions cost what a model says: `a n² + b T + 200` bytes per direction
+    /// (above the lower bound, as real directions are; `a` = 16 and `b` = 8 unless said), and
+    /// `T / n²` triangles per non-empty tile (at least one). Records every rung it is asked about.
     struct Model {
         triangles: u64,
         per_triangle: u64,
+        per_tile: u64,
         sampled: RefCell<Vec<(u32, u32)>>,
     }
 
@@ -374,11 +393,15 @@ mod tests {
         }
 
         fn with_bytes_per_triangle(triangles: u64, per_triangle: u64) -> Self {
-            Model { triangles, per_triangle, sampled: RefCell::new(Vec::new()) }
+            Model::with_costs(triangles, per_triangle, 16)
+        }
+
+        fn with_costs(triangles: u64, per_triangle: u64, per_tile: u64) -> Self {
+            Model { triangles, per_triangle, per_tile, sampled: RefCell::new(Vec::new()) }
         }
 
         fn bytes_per_direction(&self, tiles: u32) -> u64 {
-            16 * tiles as u64 * tiles as u64 + self.per_triangle * self.triangles + 200
+            self.per_tile * tiles as u64 * tiles as u64 + self.per_triangle * self.triangles + 200
         }
 
         fn load(&self, tiles: u32) -> f64 {
@@ -511,11 +534,31 @@ mod tests {
         // Tiles at the load threshold are not refined, whatever the budget.
         let model = Model::new(DENSE_TILE_LOAD as u64 * 64 * 64);
         let choice = choose(&model, &automatic(u64::MAX / 2)).unwrap();
-        assert_eq!((choice.params.lattice_n, choice.params.tiles), LADDER[4]);
-        assert!(!model.sampled().contains(&(LADDER[4].0, DENSE_TILES)));
+        assert_eq!((choice.params.lattice_n, choice.params.tiles), LADDER[6]);
+        assert!(!model.sampled().iter().any(|&(_, t)| t == DENSE_TILES));
         // Explicit directions or tiles are never refined.
         let config = BakeConfig { directions: Some(33), ..automatic(u64::MAX / 2) };
         assert!(choose(&Model::new(2_000 * 64 * 64), &config).unwrap().params.tiles <= 4 * LADDER[4].0);
+    }
+
+    #[test]
+    fn dense_tiles_are_refined_on_fewer_directions_down_to_33() {
+        // Tile records dominate: the ladder reaches 73 × 64², whose finer tiles do not fit, nor
+        // do 51 × 128²; 33 × 128² does, and is taken.
+        let model = || Model::with_costs(2_000 * 64 * 64, 8, 16_384);
+        let m = model();
+        let budget = m.estimate(4, DENSE_TILES);
+        assert!(m.estimate(6, 64) <= budget && m.estimate(5, DENSE_TILES) > budget);
+        let m = model();
+        let choice = choose(&m, &automatic(budget)).unwrap();
+        assert_eq!((choice.params.lattice_n, choice.params.tiles), (4, DENSE_TILES));
+        assert_eq!(m.sampled()[LADDER.len()..], [(6, DENSE_TILES), (5, DENSE_TILES), (4, DENSE_TILES)]);
+        // Below 33 directions the ladder's own rung stands: a byte less keeps 73 × 64², and 19 ×
+        // 128² is not tried.
+        let m = model();
+        let choice = choose(&m, &automatic(budget - 1)).unwrap();
+        assert_eq!((choice.params.lattice_n, choice.params.tiles), (6, 64));
+        assert!(!m.sampled().contains(&(3, DENSE_TILES)));
     }
 
     #[test]
