@@ -19,8 +19,10 @@ use vlf_geom::frame::frame;
 /// sections, and with them what an OBJ's `.mtl` files hold, to the input hash. Revision 3 (format
 /// 2.0) bakes tile blocks with leaves placed by the surface-area heuristic and boxed refs, stores
 /// triangles relative to the scene's centre and hashes that centre. Revision 4 weighs each ref
-/// in the heuristic by its box's share of the tile (`formats/vlf.md` §6.3).
-pub const BAKER_REVISION: u32 = 4;
+/// in the heuristic by its box's share of the tile (`formats/vlf.md` §6.3). Revision 5 extends the
+/// automatic parameters' ladder to 51 and 73 directions (`crate::params::LADDER`): a bake that
+/// asks for automatic parameters may now get a different field for the same request.
+pub const BAKER_REVISION: u32 = 5;
 
 /// The input hash of `formats/vlf.md` §3.2.
 pub fn input_hash(scene: &Scene, request: &Request) -> [u8; 32] {
