@@ -1,5 +1,6 @@
 //! Bakes are reproducible to the byte: thread count does not change the output, and a golden
-//! field's content hash is pinned so any change to the bytes is deliberate.
+//! field's content hash is pinned so any change to the bytes is deliberate; the automatic
+//! parameters of a few scenes are pinned with the baker revision that chose them.
 //!
 //! Regenerate the golden values with `UPDATE_EXPECT=1 cargo test -p vlf-tests --test determinism`.
 
@@ -86,4 +87,61 @@ fn golden_cornell_field() {
     assert_eq!((info.materials, info.cameras, info.lights), (7, 1, 2));
     expect("cornell-33x16.content-hash", &format!("{}\n", hex(&field.content_hash())));
     expect("cornell-33x16.dump.json", &(serde_json::to_string_pretty(&info).unwrap() + "\n"));
+}
+
+/// The automatic parameters of a few scenes, pinned with the baker revision that chose them. The
+/// bake cache keys a field by its inputs and request, not by the parameters chosen from them
+/// (`crates/vlf-bake/src/cache.rs`), so a change to the choice that keeps `BAKER_REVISION` would
+/// let a cache serve a field the new baker would not write. The goldens above use explicit
+/// parameters and cannot see it; this one fails, and says to bump the revision.
+#[test]
+fn automatic_parameters_change_only_with_the_baker_revision() {
+    let bunny = import::import_paths(&[fixtures().join("meshes/bunny.obj")]).unwrap();
+    let random = |n: usize, size: f64| Scene::from_triangles("random", &generate::random_cube(n, size, 1)).unwrap();
+    // 20,000 small triangles in a ball a tenth of the scene's size, and one triangle at each end
+    // of a diagonal: few tiles, each crossed by hundreds of triangles (the dense tiles of a scan).
+    let mut tris = generate::random_cube(20_000, 0.004, 1);
+    for t in &mut tris {
+        *t = t.map(|v| v.map(|c| c * 0.1));
+    }
+    tris.push([[1.0, 1.0, 1.0], [0.99, 1.0, 1.0], [1.0, 0.99, 1.0]]);
+    tris.push([[-1.0, -1.0, -1.0], [-0.99, -1.0, -1.0], [-1.0, -0.99, -1.0]]);
+    let cluster = Scene::from_triangles("cluster", &tris).unwrap();
+    let scenes = [
+        ("bunny", bunny),
+        ("random 3000, half-extent 0.05", random(3000, 0.05)),
+        ("random 20000, half-extent 0.05", random(20_000, 0.05)),
+        ("random 20000, half-extent 0.004", random(20_000, 0.004)),
+        ("a dense cluster far inside its bounding sphere", cluster),
+    ];
+    let mut actual = format!("baker revision {}\n", vlf_bake::BAKER_REVISION);
+    for (name, scene) in &scenes {
+        let choice = vlf_bake::choose(&vlf_bake::Prepared::new(scene), &BakeConfig::default()).unwrap();
+        let p = choice.params;
+        let directions = vlf_geom::Lattice::new(p.lattice_n).direction_count();
+        actual += &format!(
+            "{name}: {directions} directions × {}² tiles, leaf size {}, depth {}\n",
+            p.tiles, p.depth.leaf_size, p.depth.max_depth
+        );
+    }
+    let path = fixtures().join("expected/automatic-parameters.txt");
+    if std::env::var_os("UPDATE_EXPECT").is_some() {
+        std::fs::write(&path, &actual).unwrap();
+        return;
+    }
+    let expected = std::fs::read_to_string(&path)
+        .unwrap_or_else(|_| panic!("missing {}; run with UPDATE_EXPECT=1 to create it", path.display()));
+    if expected != actual {
+        let same_revision = expected.lines().next() == actual.lines().next();
+        panic!(
+            "the automatic parameters changed:\n--- {}\n{expected}--- now\n{actual}{}",
+            path.display(),
+            if same_revision {
+                "but BAKER_REVISION did not: bump it in crates/vlf-bake/src/sections.rs (and say why in \
+                 formats/vlf.md §3.2), then rerun with UPDATE_EXPECT=1"
+            } else {
+                "and BAKER_REVISION with them: rerun with UPDATE_EXPECT=1"
+            }
+        );
+    }
 }
