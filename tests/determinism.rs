@@ -37,6 +37,13 @@ fn one_and_two_threads_give_identical_bytes() {
 /// Compares `actual` with the checked-in `fixtures/expected/<name>`, or rewrites it when
 /// UPDATE_EXPECT=1.
 fn expect(name: &str, actual: &str) {
+    expect_or(name, actual, |_| {
+        "if deliberate, rerun with UPDATE_EXPECT=1 (and bump the format or baker revision if bytes changed)".into()
+    });
+}
+
+/// [`expect`], saying `advice(expected)` when the two differ.
+fn expect_or(name: &str, actual: &str, advice: impl FnOnce(&str) -> String) {
     let path = fixtures().join("expected").join(name);
     if std::env::var_os("UPDATE_EXPECT").is_some() {
         std::fs::create_dir_all(path.parent().unwrap()).unwrap();
@@ -45,10 +52,7 @@ fn expect(name: &str, actual: &str) {
     }
     let expected = std::fs::read_to_string(&path)
         .unwrap_or_else(|_| panic!("missing {}; run with UPDATE_EXPECT=1 to create it", path.display()));
-    assert_eq!(
-        expected, actual,
-        "{name} changed; if deliberate, rerun with UPDATE_EXPECT=1 (and bump the format or baker revision if bytes changed)"
-    );
+    assert_eq!(expected, actual, "{name} changed; {}", advice(&expected));
 }
 
 #[test]
@@ -124,24 +128,13 @@ fn automatic_parameters_change_only_with_the_baker_revision() {
             p.tiles, p.depth.leaf_size, p.depth.max_depth
         );
     }
-    let path = fixtures().join("expected/automatic-parameters.txt");
-    if std::env::var_os("UPDATE_EXPECT").is_some() {
-        std::fs::write(&path, &actual).unwrap();
-        return;
-    }
-    let expected = std::fs::read_to_string(&path)
-        .unwrap_or_else(|_| panic!("missing {}; run with UPDATE_EXPECT=1 to create it", path.display()));
-    if expected != actual {
-        let same_revision = expected.lines().next() == actual.lines().next();
-        panic!(
-            "the automatic parameters changed:\n--- {}\n{expected}--- now\n{actual}{}",
-            path.display(),
-            if same_revision {
-                "but BAKER_REVISION did not: bump it in crates/vlf-bake/src/sections.rs (and say why in \
-                 formats/vlf.md §3.2), then rerun with UPDATE_EXPECT=1"
-            } else {
-                "and BAKER_REVISION with them: rerun with UPDATE_EXPECT=1"
-            }
-        );
-    }
+    expect_or("automatic-parameters.txt", &actual, |expected| {
+        if expected.lines().next() == actual.lines().next() {
+            "the automatic parameters changed but BAKER_REVISION did not: bump it in \
+             crates/vlf-bake/src/sections.rs (and say why in formats/vlf.md §3.2), then rerun with UPDATE_EXPECT=1"
+        } else {
+            "the automatic parameters changed with BAKER_REVISION: rerun with UPDATE_EXPECT=1"
+        }
+        .into()
+    });
 }
