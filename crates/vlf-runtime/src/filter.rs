@@ -101,6 +101,9 @@ pub(crate) fn pass_mask(lanes: &[[u8; 16]; 4], limits: Limits) -> u32 {
     pass_mask_scalar(lanes, limits)
 }
 
+/// Refs filtered at a time: the bits of a `u64` mask, four groups of sixteen.
+const CHUNK: usize = 64;
+
 /// The triangle ids of the refs of a leaf of a block whose boxes pass `limits`, in ref order.
 #[derive(Clone)]
 pub(crate) struct Passing<'a> {
@@ -109,21 +112,21 @@ pub(crate) struct Passing<'a> {
     bytes: &'a [u8],
     len: usize,
     limits: Limits,
-    /// First ref of the current group of sixteen.
-    group: usize,
-    /// The refs of the current group that passed and are not yet returned.
-    mask: u32,
-    /// Triangle records to start loading for each group of passing refs (empty: none).
+    /// First ref of the current chunk of up to [`CHUNK`] refs.
+    chunk: usize,
+    /// The refs of the current chunk that passed and are not yet returned.
+    mask: u64,
+    /// Triangle records to start loading for each chunk's passing refs (empty: none).
     load: &'a [TriangleRecord],
 }
 
 impl<'a> Passing<'a> {
     /// The passing refs of the leaf of `len` refs whose bytes are `bytes` ([`Block::leaf_bytes`]);
-    /// as each group of sixteen is filtered, the records in `load` of its passing refs start
-    /// loading (pass `&[]` for no such hint).
+    /// as each chunk is filtered, the records in `load` of its passing refs start loading (pass
+    /// `&[]` for no such hint).
     #[inline(always)]
     pub(crate) fn new(bytes: &'a [u8], len: usize, limits: Limits, load: &'a [TriangleRecord]) -> Self {
-        let mut p = Passing { bytes, len, limits, group: 0, mask: 0, load };
+        let mut p = Passing { bytes, len, limits, chunk: 0, mask: 0, load };
         p.fill();
         p
     }
@@ -135,15 +138,15 @@ impl<'a> Passing<'a> {
         Some(u32::from_le_bytes(self.bytes.get(at..at + 4)?.try_into().ok()?))
     }
 
-    /// Starts loading the records of the current group's passing refs.
+    /// Starts loading the records of the current chunk's passing refs.
     #[inline(always)]
-    fn load_group(&self) {
+    fn load_chunk(&self) {
         if self.load.is_empty() {
             return;
         }
         let mut mask = self.mask;
         while mask != 0 {
-            let i = self.group + mask.trailing_zeros() as usize;
+            let i = self.chunk + mask.trailing_zeros() as usize;
             mask &= mask - 1;
             if let Some(record) = self.id(i).and_then(|id| self.load.get(id as usize)) {
                 prefetch(record);
@@ -151,10 +154,10 @@ impl<'a> Passing<'a> {
         }
     }
 
-    /// Sixteen bytes of each box array from the current group on, 255 past the section's end.
+    /// Sixteen bytes of each box array from ref `at` on, 255 past the section's end.
     #[inline(always)]
-    fn lanes(&self) -> [[u8; 16]; 4] {
-        let (at, len) = (self.group, self.len);
+    fn lanes(&self, at: usize) -> [[u8; 16]; 4] {
+        let len = self.len;
         let lane = |from: &[u8], a: usize| -> [u8; 16] { from[a * len..a * len + 16].try_into().expect("16 bytes") };
         match self.bytes.get(at..at + 3 * len + 16) {
             // One bounds check for the four arrays (the last one's lane may run into the ids).
@@ -169,24 +172,50 @@ impl<'a> Passing<'a> {
         }
     }
 
+    /// The pass mask of the `n ≤ CHUNK` refs from the current chunk on, in groups of sixteen
+    /// (bits past `n` are those of the bytes that follow, to be masked off).
+    #[inline(always)]
+    fn chunk_mask(&self, n: usize) -> u64 {
+        let (at, len) = (self.chunk, self.len);
+        let span = n.next_multiple_of(16);
+        let array = |window: &'a [u8], a: usize| &window[a * len..a * len + span];
+        match self.bytes.get(at..at + 3 * len + span) {
+            // One bounds check for the chunk's four arrays (the last one's groups may run into
+            // the ids), and its groups as exact chunks of sixteen, which need none.
+            Some(window) => {
+                let (x_lo, x_hi) = (array(window, 0).chunks_exact(16), array(window, 1).chunks_exact(16));
+                let (y_lo, y_hi) = (array(window, 2).chunks_exact(16), array(window, 3).chunks_exact(16));
+                let lane = |c: &[u8]| -> [u8; 16] { c.try_into().expect("an exact chunk of sixteen") };
+                x_lo.zip(x_hi).zip(y_lo.zip(y_hi)).enumerate().fold(0, |mask, (g, ((a, b), (c, d)))| {
+                    mask | (pass_mask(&[lane(a), lane(b), lane(c), lane(d)], self.limits) as u64) << (16 * g)
+                })
+            }
+            None => (0..span)
+                .step_by(16)
+                .fold(0, |mask, g| mask | (pass_mask(&self.lanes(at + g), self.limits) as u64) << g),
+        }
+    }
+
     /// Whether no ref is left.
     #[inline(always)]
     pub(crate) fn is_done(&self) -> bool {
         self.mask == 0
     }
 
-    /// Moves to the first group with a passing ref, or to the end.
+    /// Moves to the first chunk with a passing ref, or to the end. A chunk's groups of sixteen
+    /// are filtered in one tight loop, apart from the triangle tests that consume its refs, so
+    /// that the loop keeps its few values in registers (most leaves are one chunk).
     #[inline(always)]
     fn fill(&mut self) {
-        while self.group < self.len {
-            let left = self.len - self.group;
-            let valid = if left >= 16 { 0xffff } else { (1u32 << left) - 1 };
-            self.mask = pass_mask(&self.lanes(), self.limits) & valid;
+        while self.chunk < self.len {
+            let left = self.len - self.chunk;
+            let mask = self.chunk_mask(left.min(CHUNK));
+            self.mask = if left >= CHUNK { mask } else { mask & ((1u64 << left) - 1) };
             if self.mask != 0 {
-                self.load_group();
+                self.load_chunk();
                 return;
             }
-            self.group += 16;
+            self.chunk += CHUNK;
         }
     }
 }
@@ -199,10 +228,10 @@ impl Iterator for Passing<'_> {
         if self.mask == 0 {
             return None;
         }
-        let i = self.group + self.mask.trailing_zeros() as usize;
+        let i = self.chunk + self.mask.trailing_zeros() as usize;
         self.mask &= self.mask - 1;
         if self.mask == 0 {
-            self.group += 16;
+            self.chunk += CHUNK;
             self.fill();
         }
         self.id(i)
@@ -260,7 +289,8 @@ mod tests {
     fn passing_refs_are_those_whose_boxes_meet_the_ray_box() {
         let mut next = rng(11);
         for round in 0..500 {
-            let m = (next() % 70) as usize;
+            // Leaves of up to three chunks of 64 refs, and partial groups of sixteen.
+            let m = (next() % 150) as usize;
             let refs: Vec<Ref> = (0..m)
                 .map(|i| {
                     let (a, b, c, d) = (next() as u8, next() as u8, next() as u8, next() as u8);
