@@ -182,7 +182,9 @@ fn a_lying_direction_vector_changes_only_lattices_past_the_fine_table() {
 
 #[test]
 fn targeted_lies_deep_inside_sections() {
-    let scene = Scene::from_triangles("random", &generate::random_cube(400, 0.1, 4)).unwrap();
+    // Enough triangles that the fullest tile holds several leaves under the leaf heuristic (400
+    // did until baker revision 6 made leaf visits dearer).
+    let scene = Scene::from_triangles("random", &generate::random_cube(1500, 0.1, 4)).unwrap();
     let (dir, honest) = vlf_tests::bake(&scene, 33, 16, DepthPolicy { leaf_size: 2, max_depth: 6 });
     let bytes = std::fs::read(dir.path().join("scene.vlf")).unwrap();
     let r = honest.reader();

@@ -21,8 +21,10 @@ use vlf_geom::frame::frame;
 /// triangles relative to the scene's centre and hashes that centre. Revision 4 weighs each ref
 /// in the heuristic by its box's share of the tile (`formats/vlf.md` §6.3). Revision 5 extends the
 /// automatic parameters' ladder to 51 and 73 directions (`crate::params::LADDER`): a bake that
-/// asks for automatic parameters may now get a different field for the same request.
-pub const BAKER_REVISION: u32 = 5;
+/// asks for automatic parameters may now get a different field for the same request. Revision 6
+/// raises the leaf heuristic's cost of visiting a leaf from 1.5 to 2.5 triangle tests
+/// (`formats/vlf.md` §6.3): fewer, longer leaves.
+pub const BAKER_REVISION: u32 = 6;
 
 /// The input hash of `formats/vlf.md` §3.2.
 pub fn input_hash(scene: &Scene, request: &Request) -> [u8; 32] {
