@@ -44,47 +44,6 @@ count() { # FIELD RAYS [--any]: instructions per ray
 echo "| scene | outside | inside | incoherent | shadow (from inside hits) |"
 echo "| --- | ---: | ---: | ---: | ---: |"
 for s in $scenes; do
-  # Baked every run: a field left by an older baker would measure that baker.
-  $B bake "$W/$s.obj" -o "$W/$s.vlf" -q
-  for view in outside inside; do
-    $B rays "$W/$s.vlf" --view $view --width 512 --height 512 -o "$W/$s-$view-all.bin" -q
-  done
-  $B trace "$W/$s.vlf" --rays "$W/$s-inside-all.bin" -o "$W/$s-inside-hits.bin" -q
-  $B dump "$W/$s.vlf" --json > "$W/$s.json"
-  python3 - "$W" "$s" <<'PY'
-import json, math, random, struct, sys
-w, s = sys.argv[1], sys.argv[2]
-info = json.load(open(f"{w}/{s}.json"))
-c, r = info["center"], info["radius"]
-lo = [c[k] + info["aabb_min"][k] for k in range(3)]
-hi = [c[k] + info["aabb_max"][k] for k in range(3)]
-for view in ("outside", "inside"):
-    data = open(f"{w}/{s}-{view}-all.bin", "rb").read()
-    open(f"{w}/{s}-{view}.bin", "wb").write(data[32 * 512 * 224 : 32 * 512 * 288])
-rng = random.Random(1)
-out = []
-for _ in range(20_000):
-    o = [rng.uniform(lo[k], hi[k]) for k in range(3)]
-    z = rng.uniform(-1.0, 1.0)
-    a = rng.uniform(0.0, 2.0 * math.pi)
-    q = math.sqrt(1.0 - z * z)
-    out.append(struct.pack("<8f", *o, 0.0, q * math.cos(a), q * math.sin(a), z, float("inf")))
-open(f"{w}/{s}-incoherent.bin", "wb").write(b"".join(out))
-# Shadow rays, as the peers make them: from each hit of the inside view towards the light, on
-# [1e-4, 1 - 1e-4] of the segment.
-light = [c[0] + 0.3 * r, c[1] + 3.0 * r, c[2] + 0.2 * r]
-rays = open(f"{w}/{s}-inside-all.bin", "rb").read()
-hits = open(f"{w}/{s}-inside-hits.bin", "rb").read()
-out = []
-for i in range(0, len(rays) // 32, 8):
-    ray = struct.unpack_from("<8f", rays, 32 * i)
-    t = struct.unpack_from("<f", hits, 16 * i)[0]
-    if math.isinf(t):
-        continue
-    p = [ray[k] + t * ray[4 + k] for k in range(3)]
-    p = [struct.unpack("<f", struct.pack("<f", v))[0] for v in p]
-    out.append(struct.pack("<8f", *p, 1e-4, *[light[k] - p[k] for k in range(3)], 1.0 - 1e-4))
-open(f"{w}/{s}-shadow.bin", "wb").write(b"".join(out))
-PY
+  bash docs/benchmarks/single-ray-sets.sh "$s"
   echo "| $s | $(count "$W/$s.vlf" "$W/$s-outside.bin") | $(count "$W/$s.vlf" "$W/$s-inside.bin") | $(count "$W/$s.vlf" "$W/$s-incoherent.bin") | $(count "$W/$s.vlf" "$W/$s-shadow.bin" --any) |"
 done

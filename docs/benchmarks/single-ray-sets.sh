@@ -1,0 +1,66 @@
+#!/usr/bin/env bash
+# The ray sets of the single-ray measurements for one scene, and its field at the default
+# parameters: what `single-ray.sh`, `single-ray-time.sh` and `single-ray-fields.sh` read.
+#
+#   bash docs/benchmarks/single-ray-sets.sh SCENE [MESH]
+#
+# Bakes target/single-ray/SCENE.obj (copied from MESH if given) to SCENE.vlf at the default
+# parameters, and writes next to it: SCENE-outside-all.bin and SCENE-inside-all.bin (512² primary
+# views, `vlf-bake rays`) and their middle 64 rows (SCENE-outside.bin, SCENE-inside.bin); 20,000
+# incoherent rays (origins in the scene's box, random directions, seed 1); and shadow rays (any
+# hit) from every eighth inside hit towards the peers' light, `centre + (0.3, 3, 0.2)·R`. For the
+# random scenes of the peers benchmark, make the mesh first, e.g.
+# `vlf-bake gen random --count 100000 --size 0.0232 --seed 1 -o target/single-ray/r100kd.obj`.
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+exec < <(:)
+[ $# -ge 1 ] || { sed -n 2,13p "$0" >&2; exit 2; }
+s=$1
+W=target/single-ray
+mkdir -p "$W"
+[ $# -ge 2 ] && cp -u "$2" "$W/$s.obj"
+[ -f "$W/$s.obj" ] || { echo "no $W/$s.obj: pass the mesh as the second argument" >&2; exit 1; }
+cargo build --release -q --bin vlf-bake
+B=target/release/vlf-bake
+# Baked every run: a field left by an older baker would measure that baker.
+$B bake "$W/$s.obj" -o "$W/$s.vlf" -q
+for view in outside inside; do
+  $B rays "$W/$s.vlf" --view $view --width 512 --height 512 -o "$W/$s-$view-all.bin" -q
+done
+$B trace "$W/$s.vlf" --rays "$W/$s-inside-all.bin" -o "$W/$s-inside-hits.bin" -q
+$B dump "$W/$s.vlf" --json > "$W/$s.json"
+python3 - "$W" "$s" <<'PY'
+import json, math, random, struct, sys
+w, s = sys.argv[1], sys.argv[2]
+info = json.load(open(f"{w}/{s}.json"))
+c, r = info["center"], info["radius"]
+lo = [c[k] + info["aabb_min"][k] for k in range(3)]
+hi = [c[k] + info["aabb_max"][k] for k in range(3)]
+for view in ("outside", "inside"):
+    data = open(f"{w}/{s}-{view}-all.bin", "rb").read()
+    open(f"{w}/{s}-{view}.bin", "wb").write(data[32 * 512 * 224 : 32 * 512 * 288])
+rng = random.Random(1)
+out = []
+for _ in range(20_000):
+    o = [rng.uniform(lo[k], hi[k]) for k in range(3)]
+    z = rng.uniform(-1.0, 1.0)
+    a = rng.uniform(0.0, 2.0 * math.pi)
+    q = math.sqrt(1.0 - z * z)
+    out.append(struct.pack("<8f", *o, 0.0, q * math.cos(a), q * math.sin(a), z, float("inf")))
+open(f"{w}/{s}-incoherent.bin", "wb").write(b"".join(out))
+# Shadow rays, as the peers make them: from each hit of the inside view towards the light, on
+# [1e-4, 1 - 1e-4] of the segment.
+light = [c[0] + 0.3 * r, c[1] + 3.0 * r, c[2] + 0.2 * r]
+rays = open(f"{w}/{s}-inside-all.bin", "rb").read()
+hits = open(f"{w}/{s}-inside-hits.bin", "rb").read()
+out = []
+for i in range(0, len(rays) // 32, 8):
+    ray = struct.unpack_from("<8f", rays, 32 * i)
+    t = struct.unpack_from("<f", hits, 16 * i)[0]
+    if math.isinf(t):
+        continue
+    p = [ray[k] + t * ray[4 + k] for k in range(3)]
+    p = [struct.unpack("<f", struct.pack("<f", v))[0] for v in p]
+    out.append(struct.pack("<8f", *p, 1e-4, *[light[k] - p[k] for k in range(3)], 1.0 - 1e-4))
+open(f"{w}/{s}-shadow.bin", "wb").write(b"".join(out))
+PY
