@@ -132,6 +132,8 @@ pub struct Block<'a> {
     bounds: &'a [u16],
     /// The ends of the leaves.
     ends: &'a [u32],
+    /// The block's 4-byte quarters, from its start to the end of the section.
+    quarters: &'a [u32],
 }
 
 impl<'a> Block<'a> {
@@ -155,13 +157,32 @@ impl<'a> Block<'a> {
         if header_bytes(k).checked_add(m.checked_mul(8)?)? > bytes.len() {
             return None;
         }
-        Some(Block { bytes, k, m, bounds, ends })
+        Some(Block { bytes, k, m, bounds, ends, quarters })
     }
 
     /// The number of leaves, `K ≥ 1`.
     #[inline(always)]
     pub fn leaf_count(&self) -> usize {
         self.k
+    }
+
+    /// The block's bytes, from its start to the end of the section.
+    #[inline(always)]
+    pub fn bytes(&self) -> &'a [u8] {
+        self.bytes
+    }
+
+    /// The block's 4-byte quarters, from its start to the end of the section: ref `i` of a leaf
+    /// whose arrays start at byte `b` (a multiple of 4) has its id at quarter `b / 4 + len + i`.
+    #[inline(always)]
+    pub fn quarters(&self) -> &'a [u32] {
+        self.quarters
+    }
+
+    /// `ends[k]`: the refs in leaves `0..=k`, for `k < K`.
+    #[inline(always)]
+    pub fn ends(&self) -> &'a [u32] {
+        self.ends
     }
 
     /// The number of refs, `m`.

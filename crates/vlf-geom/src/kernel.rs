@@ -8,22 +8,23 @@
 //! [`TriRay::hits_in`] hands every hit to the caller, for the queries that want them all.
 
 use crate::ray::{Counter, Hit};
-use crate::triangle::{TriHit, TriRay};
+use crate::simd::{Isa, Tri};
+use crate::triangle::{Candidate, TriRay};
 
 /// Where the kernel finds a triangle's vertices by id.
 pub trait Triangles {
     /// The vertices of triangle `id`, or `None` if there is no such triangle (an id read from a
-    /// file that lies; the kernel skips it).
-    fn vertices(&self, id: u32) -> Option<[[f32; 3]; 3]>;
+    /// file that lies, or one a caller hides; the kernel skips it).
+    fn vertices(&self, id: u32) -> Option<&Tri>;
 
     /// The number of triangles: the ids `0..count()` are the valid ones.
     fn count(&self) -> usize;
 }
 
-impl Triangles for [[[f32; 3]; 3]] {
+impl Triangles for [Tri] {
     #[inline(always)]
-    fn vertices(&self, id: u32) -> Option<[[f32; 3]; 3]> {
-        self.get(id as usize).copied()
+    fn vertices(&self, id: u32) -> Option<&Tri> {
+        self.get(id as usize)
     }
 
     #[inline(always)]
@@ -33,6 +34,11 @@ impl Triangles for [[[f32; 3]; 3]] {
 }
 
 /// The closest hit found so far along one ray: the kernel's state from one leaf to the next.
+///
+/// The answer does not depend on the order in which triangles are tested: of the hits on the
+/// ray's range, it is the one with the smallest `t` (rounded to f32), and of several at the same
+/// `t`, the one with the smallest id. So every acceleration path, whatever order it meets
+/// triangles in, and the brute force give the same hit, bit for bit.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Closest {
     /// The best hit, if any.
@@ -47,57 +53,97 @@ impl Closest {
     pub fn new(tmax: f32) -> Self {
         Closest { hit: None, tmax }
     }
-}
 
-/// The next id of `ids` that `tris` holds, with its vertices.
-#[inline(always)]
-fn next_triangle<T: Triangles + ?Sized>(tris: &T, ids: &mut impl Iterator<Item = u32>) -> Option<(u32, [[f32; 3]; 3])> {
-    loop {
-        let id = ids.next()?;
-        if let Some(v) = tris.vertices(id) {
-            return Some((id, v));
-        }
-    }
-}
-
-impl Closest {
-    /// Takes `hit` on triangle `id` if it lies within the interval still searched.
+    /// Takes the place `c` where the line of `ray` meets triangle `id`, if it lies on the ray's
+    /// range `[tmin, tmax]` (compared in f64, before rounding) and comes before the best hit (its
+    /// `t` rounded to f32 smaller, or equal with a smaller id).
     #[inline(always)]
-    fn take(&mut self, id: u32, hit: Option<TriHit>) {
-        if let Some(h) = hit {
-            self.tmax = h.t;
-            self.hit = Some(Hit { t: h.t, prim: id, u: h.u, v: h.v });
+    pub fn take(&mut self, ray: &TriRay, id: u32, c: Candidate) {
+        if !(c.t >= ray.tmin && c.t <= ray.tmax) {
+            return;
+        }
+        let t = c.t as f32;
+        if t < self.tmax || (t == self.tmax && self.hit.is_none_or(|h| id < h.prim)) {
+            self.tmax = t;
+            self.hit = Some(Hit { t, prim: id, u: c.u as f32, v: c.v as f32 });
         }
     }
+}
+
+/// A triangle the kernel never hits, to fill the lanes of a last, short batch.
+pub static FILLER: Tri = [[0.0; 3]; 3];
+
+/// The next triangles of `ids` that `tris` holds, up to four: their ids and vertices, and how
+/// many there are (the unused lanes hold [`FILLER`]).
+#[inline(always)]
+fn next_four<'t, T: Triangles + ?Sized>(
+    tris: &'t T,
+    ids: &mut impl Iterator<Item = u32>,
+) -> ([u32; 4], [&'t Tri; 4], usize) {
+    let mut id = [0u32; 4];
+    let mut tri = [&FILLER; 4];
+    let mut n = 0;
+    while n < 4 {
+        let Some(i) = ids.next() else { break };
+        if let Some(t) = tris.vertices(i) {
+            (id[n], tri[n]) = (i, t);
+            n += 1;
+        }
+    }
+    (id, tri, n)
 }
 
 impl TriRay {
-    /// Tests the triangles `ids` of `tris` in order, keeping the closest hit in `best` (a hit at
-    /// the same `t` as the best replaces it: the last one tested wins). Ids `tris` does not hold
-    /// are skipped. Counts one test per triangle tested.
+    /// Tests the first `n ≤ 4` of `tris` (triangles `ids`; the other lanes are ignored), keeping
+    /// the closest hit in `best` ([`Closest::take`]). The four-lane test of `isa`: the answer of
+    /// [`TriRay::closest_in_scalar`] over the same triangles, to the bit.
+    #[inline(always)]
+    pub fn closest4(&self, isa: impl Isa, ids: [u32; 4], tris: [&Tri; 4], n: usize, best: &mut Closest) {
+        let found = isa.candidates_first(self, tris, n);
+        for i in 0..n.min(4) {
+            if let Some(c) = found[i] {
+                best.take(self, ids[i], c);
+            }
+        }
+    }
+
+    /// Tests the first `n ≤ 4` of `tris` (triangles `ids`) and returns the first of them, in
+    /// order, that the ray hits on its range, with its lane: the four-lane twin of
+    /// [`TriRay::any_in_scalar`].
+    #[inline(always)]
+    pub fn any4(&self, isa: impl Isa, ids: [u32; 4], tris: [&Tri; 4], n: usize) -> Option<(usize, Hit)> {
+        let found = isa.candidates_first(self, tris, n);
+        (0..n.min(4)).find_map(|i| Some((i, self.hit_on(ids[i], found[i]?)?)))
+    }
+
+    /// Tests the triangles `ids` of `tris`, keeping the closest hit in `best` ([`Closest::take`]:
+    /// the answer does not depend on their order). Ids `tris` does not hold are skipped. Counts
+    /// one test per triangle tested.
     ///
-    /// Triangles are tested two at a time (SSE2 on x86-64) and their answers taken in
-    /// order, each against the interval left by the one before: the answer of
-    /// [`TriRay::closest_in_scalar`], its plain twin, to the bit.
+    /// Triangles are tested four at a time with the vector test of `isa` ([`crate::simd`]): the
+    /// answer of [`TriRay::closest_in_scalar`], its plain twin, to the bit.
     #[inline(always)]
     pub fn closest_in<T: Triangles + ?Sized, C: Counter>(
         &self,
+        isa: impl Isa,
         tris: &T,
         ids: impl IntoIterator<Item = u32>,
         best: &mut Closest,
         counter: &mut C,
     ) {
         let mut ids = ids.into_iter();
-        while let Some((a, va)) = next_triangle(tris, &mut ids) {
-            counter.test();
-            let Some((b, vb)) = next_triangle(tris, &mut ids) else {
-                best.take(a, self.candidate(&va).and_then(|c| c.within(self.tmin, best.tmax)));
+        loop {
+            let (id, tri, n) = next_four(tris, &mut ids);
+            if n == 0 {
                 return;
-            };
-            counter.test();
-            let [ca, cb] = self.candidates(&va, &vb);
-            best.take(a, ca.and_then(|c| c.within(self.tmin, best.tmax)));
-            best.take(b, cb.and_then(|c| c.within(self.tmin, best.tmax)));
+            }
+            for _ in 0..n {
+                counter.test();
+            }
+            self.closest4(isa, id, tri, n, best);
+            if n < 4 {
+                return;
+            }
         }
     }
 
@@ -110,42 +156,43 @@ impl TriRay {
         counter: &mut C,
     ) {
         for id in ids {
-            let Some([a, b, c]) = tris.vertices(id) else { continue };
+            let Some(tri) = tris.vertices(id) else { continue };
             counter.test();
-            best.take(id, self.intersect(a, b, c, best.tmax));
+            if let Some(c) = self.candidate(tri) {
+                best.take(self, id, c);
+            }
         }
     }
 
     /// Tests the triangles `ids` of `tris` in order and returns the first hit on
     /// `[tmin, tmax]` (not necessarily the closest). Ids `tris` does not hold are skipped. Counts
-    /// one test per triangle tested. Two at a time, as [`TriRay::closest_in`], with the answer and
-    /// the count of [`TriRay::any_in_scalar`] (the second of a pair whose first is hit is not
-    /// counted: the scalar kernel would not have tested it).
+    /// one test per triangle tested, up to the one hit. Four at a time, as
+    /// [`TriRay::closest_in`], with the answer and the count of [`TriRay::any_in_scalar`].
     #[inline(always)]
     pub fn any_in<T: Triangles + ?Sized, C: Counter>(
         &self,
+        isa: impl Isa,
         tris: &T,
         ids: impl IntoIterator<Item = u32>,
-        tmax: f32,
         counter: &mut C,
     ) -> Option<Hit> {
-        let hit = |id: u32, h: TriHit| Hit { t: h.t, prim: id, u: h.u, v: h.v };
         let mut ids = ids.into_iter();
-        while let Some((a, va)) = next_triangle(tris, &mut ids) {
-            counter.test();
-            let Some((b, vb)) = next_triangle(tris, &mut ids) else {
-                return self.candidate(&va).and_then(|c| c.within(self.tmin, tmax)).map(|h| hit(a, h));
-            };
-            let [ca, cb] = self.candidates(&va, &vb);
-            if let Some(h) = ca.and_then(|c| c.within(self.tmin, tmax)) {
-                return Some(hit(a, h));
+        loop {
+            let (id, tri, n) = next_four(tris, &mut ids);
+            if n == 0 {
+                return None;
             }
-            counter.test();
-            if let Some(h) = cb.and_then(|c| c.within(self.tmin, tmax)) {
-                return Some(hit(b, h));
+            let found = self.any4(isa, id, tri, n);
+            for _ in 0..found.map_or(n, |(i, _)| i + 1) {
+                counter.test();
+            }
+            if let Some((_, hit)) = found {
+                return Some(hit);
+            }
+            if n < 4 {
+                return None;
             }
         }
-        None
     }
 
     /// [`TriRay::any_in`] one triangle at a time: the plain twin the tests hold it to.
@@ -153,17 +200,24 @@ impl TriRay {
         &self,
         tris: &T,
         ids: impl IntoIterator<Item = u32>,
-        tmax: f32,
         counter: &mut C,
     ) -> Option<Hit> {
         for id in ids {
-            let Some([a, b, c]) = tris.vertices(id) else { continue };
+            let Some(tri) = tris.vertices(id) else { continue };
             counter.test();
-            if let Some(h) = self.intersect(a, b, c, tmax) {
-                return Some(Hit { t: h.t, prim: id, u: h.u, v: h.v });
+            if let Some(hit) = self.candidate(tri).and_then(|c| self.hit_on(id, c)) {
+                return Some(hit);
             }
         }
         None
+    }
+
+    /// The hit on triangle `id` where the ray's line meets it at `c`, if that lies on the ray's
+    /// range.
+    #[inline(always)]
+    fn hit_on(&self, id: u32, c: Candidate) -> Option<Hit> {
+        let h = c.within(self.tmin, self.tmax)?;
+        Some(Hit { t: h.t, prim: id, u: h.u, v: h.v })
     }
 
     /// Tests the triangles `ids` of `tris` in order and hands every hit on `[tmin, *tmax]` to
@@ -179,9 +233,9 @@ impl TriRay {
         mut found: impl FnMut(Hit, &mut f32),
     ) {
         for id in ids {
-            let Some([a, b, c]) = tris.vertices(id) else { continue };
+            let Some(tri) = tris.vertices(id) else { continue };
             counter.test();
-            if let Some(h) = self.intersect(a, b, c, *tmax) {
+            if let Some(h) = self.candidate(tri).and_then(|c| c.within(self.tmin, *tmax as f64)) {
                 found(Hit { t: h.t, prim: id, u: h.u, v: h.v }, tmax);
             }
         }
@@ -191,7 +245,7 @@ impl TriRay {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::triangle::Candidate;
+    use crate::simd::Baseline;
     use crate::{Ray, TraceStats};
 
     const TRIS: [[[f32; 3]; 3]; 3] = [
@@ -250,13 +304,17 @@ mod tests {
         tris
     }
 
-    /// The two-lane kernel gives the scalar kernel's answers and counts, to the bit: the
-    /// candidates of each pair, the closest hit and the first hit, over rays through lattice
-    /// points (shared edges and vertices), along the axes (shear by zero), and random ones, with
-    /// lists that repeat ids and name ids that do not exist, of every length (odd ones end in a
-    /// single triangle), and finite and infinite `tmax`.
+    /// Every vector kernel gives the scalar kernel's answers and counts, to the bit: the
+    /// candidates of each pair and each four (two-lane SSE2, the baseline's four, and AVX2's four
+    /// where the CPU has it), the closest hit and the first hit, over rays through lattice points
+    /// (shared edges and vertices), along the axes (shear by zero), and random ones, with lists
+    /// that repeat ids and name ids that do not exist, of every length (short last batches), and
+    /// finite and infinite `tmax`. The closest hit is also the same for the list reversed: it
+    /// does not depend on the order of the tests.
     #[test]
-    fn the_two_lane_kernel_is_the_scalar_kernel() {
+    fn the_vector_kernels_are_the_scalar_kernel() {
+        let avx2 = crate::simd::Avx2::detect();
+        println!("AVX2 on this CPU: {}", avx2.is_some());
         let mut next = rng(0x51f1);
         let tris = awkward_triangles(&mut next);
         let n = tris.len() as u64;
@@ -264,6 +322,8 @@ mod tests {
             let mut next = rng(0x77);
             move || (next() >> 40) as f32 / (1u64 << 24) as f32
         };
+        let bits = |c: Option<Candidate>| c.map(|c| [c.t, c.u, c.v].map(f64::to_bits));
+        let hit_bits = |h: Option<Hit>| h.map(|h| (h.prim, h.t.to_bits(), h.u.to_bits(), h.v.to_bits()));
         for round in 0..20_000 {
             let org = [unit() * 4.0 - 2.0, unit() * 4.0 - 2.0, unit() * 4.0 - 2.0];
             let target = match round % 3 {
@@ -284,31 +344,61 @@ mod tests {
                 continue;
             }
             let tr = TriRay::new(&ray);
-            for (p, q) in [(next() % n, next() % n), (next() % n, next() % n)] {
-                let (p, q) = (&tris[p as usize], &tris[q as usize]);
-                let want = [tr.candidate(p), tr.candidate(q)];
-                let got = tr.candidates(p, q);
-                let bits = |c: [Option<Candidate>; 2]| c.map(|c| c.map(|c| [c.t, c.u, c.v].map(f64::to_bits)));
-                assert_eq!(bits(got), bits(want), "round {round}");
+            let four: [&Tri; 4] = std::array::from_fn(|_| &tris[(next() % n) as usize]);
+            let want = four.map(|t| bits(tr.candidate(t)));
+            let [a, b] = crate::simd::candidates2(&tr, four[0], four[1]);
+            assert_eq!([bits(a), bits(b)], [want[0], want[1]], "round {round}: two lanes");
+            assert_eq!(crate::simd::Baseline.candidates4(&tr, four).map(bits), want, "round {round}: baseline");
+            if let Some(avx2) = avx2 {
+                assert_eq!(avx2.candidates4(&tr, four).map(bits), want, "round {round}: AVX2");
             }
             let len = (next() % 40) as usize;
             // Ids past the end stand for the ids a lying file names (skipped).
             let ids: Vec<u32> = (0..len).map(|_| (next() % (n + 3)) as u32).collect();
-            let (mut fast, mut plain) = (TraceStats::default(), TraceStats::default());
-            let (mut a, mut b) = (Closest::new(ray.tmax), Closest::new(ray.tmax));
-            tr.closest_in(&tris[..], ids.iter().copied(), &mut a, &mut fast);
-            tr.closest_in_scalar(&tris[..], ids.iter().copied(), &mut b, &mut plain);
-            let hit_bits = |h: Option<Hit>| h.map(|h| (h.prim, h.t.to_bits(), h.u.to_bits(), h.v.to_bits()));
-            assert_eq!(
-                (hit_bits(a.hit), a.tmax.to_bits()),
-                (hit_bits(b.hit), b.tmax.to_bits()),
-                "round {round}: {ids:?}"
+            let (mut plain_work, mut plain) = (TraceStats::default(), Closest::new(ray.tmax));
+            tr.closest_in_scalar(&tris[..], ids.iter().copied(), &mut plain, &mut plain_work);
+            let mut reversed = Closest::new(ray.tmax);
+            tr.closest_in_scalar(&tris[..], ids.iter().rev().copied(), &mut reversed, &mut ());
+            assert_eq!(hit_bits(reversed.hit), hit_bits(plain.hit), "round {round}: order matters");
+            let any_work = &mut TraceStats::default();
+            let any_plain = tr.any_in_scalar(&tris[..], ids.iter().copied(), any_work);
+            let check = |isa: &dyn Fn(&mut Closest, &mut TraceStats) -> Option<Hit>, name: &str| {
+                let (mut work, mut best) = (TraceStats::default(), Closest::new(ray.tmax));
+                let any = isa(&mut best, &mut work);
+                assert_eq!(
+                    (hit_bits(best.hit), best.tmax.to_bits()),
+                    (hit_bits(plain.hit), plain.tmax.to_bits()),
+                    "round {round} {name}: {ids:?}"
+                );
+                assert_eq!(hit_bits(any), hit_bits(any_plain), "round {round} {name}: any hit of {ids:?}");
+                work
+            };
+            let base = check(
+                &|best, work| {
+                    tr.closest_in(crate::simd::Baseline, &tris[..], ids.iter().copied(), best, work);
+                    let mut any_work = TraceStats::default();
+                    let any = tr.any_in(crate::simd::Baseline, &tris[..], ids.iter().copied(), &mut any_work);
+                    work.add(&any_work);
+                    any
+                },
+                "baseline",
             );
-            assert_eq!(fast, plain);
-            let got = tr.any_in(&tris[..], ids.iter().copied(), ray.tmax, &mut fast);
-            let want = tr.any_in_scalar(&tris[..], ids.iter().copied(), ray.tmax, &mut plain);
-            assert_eq!(hit_bits(got), hit_bits(want), "round {round}: {ids:?}");
-            assert_eq!(fast, plain, "round {round}: any-hit counts");
+            let mut want_work = plain_work;
+            want_work.add(any_work);
+            assert_eq!(base, want_work, "round {round}: counts");
+            if let Some(avx2) = avx2 {
+                let wide = check(
+                    &|best, work| {
+                        tr.closest_in(avx2, &tris[..], ids.iter().copied(), best, work);
+                        let mut any_work = TraceStats::default();
+                        let any = tr.any_in(avx2, &tris[..], ids.iter().copied(), &mut any_work);
+                        work.add(&any_work);
+                        any
+                    },
+                    "AVX2",
+                );
+                assert_eq!(wide, want_work, "round {round}: AVX2 counts");
+            }
         }
     }
 
@@ -319,12 +409,12 @@ mod tests {
         let mut best = Closest::new(ray.tmax);
         let mut work = TraceStats::default();
         // A lying id (7) is skipped and not counted.
-        tr.closest_in(&TRIS[..], [0, 7, 1, 2], &mut best, &mut work);
+        tr.closest_in(Baseline, &TRIS[..], [0, 7, 1, 2], &mut best, &mut work);
         let hit = best.hit.unwrap();
         assert_eq!((hit.prim, hit.t, best.tmax), (1, 1.0, 1.0));
         assert_eq!(work.triangle_tests, 3);
         // A later leaf with only farther triangles changes nothing.
-        tr.closest_in(&TRIS[..], [0], &mut best, &mut work);
+        tr.closest_in(Baseline, &TRIS[..], [0], &mut best, &mut work);
         assert_eq!(best.hit.unwrap().prim, 1);
     }
 
@@ -333,9 +423,10 @@ mod tests {
         let ray = Ray::new([0.0, 0.0, 0.0], [0.0, 0.0, 1.0]);
         let tr = TriRay::new(&ray);
         let mut work = TraceStats::default();
-        assert_eq!(tr.any_in(&TRIS[..], [2, 0, 1], f32::INFINITY, &mut work).unwrap().prim, 0);
+        assert_eq!(tr.any_in(Baseline, &TRIS[..], [2, 0, 1], &mut work).unwrap().prim, 0);
         assert_eq!(work.triangle_tests, 2);
-        assert_eq!(tr.any_in(&TRIS[..], [0, 1], 0.5, &mut ()), None);
+        let short = TriRay::new(&Ray { tmax: 0.5, ..ray });
+        assert_eq!(short.any_in(Baseline, &TRIS[..], [0, 1], &mut ()), None);
     }
 
     #[test]

@@ -7,7 +7,7 @@
 //! No I/O, no allocation on query paths, no dependency on the file format.
 
 #![deny(missing_docs)]
-// One function holds `unsafe`: the two-lane triangle test (`triangle::TriRay::candidates`).
+// Only the vector twins of the triangle test (`simd`) hold `unsafe`.
 #![deny(unsafe_code)]
 
 pub mod camera;
@@ -15,13 +15,15 @@ pub mod frame;
 pub mod kernel;
 pub mod lattice;
 pub mod ray;
+pub mod simd;
 pub mod triangle;
 
 pub use camera::Camera;
 pub use kernel::{Closest, Triangles};
 pub use lattice::Lattice;
 pub use ray::{Counter, Hit, Intersector, Ray, TraceStats};
-pub use triangle::{TriHit, TriRay, is_degenerate};
+pub use simd::{Avx2, Baseline, Isa, Tri};
+pub use triangle::{Candidate, TriHit, TriRay, is_degenerate};
 
 /// The reference intersector: every triangle, every ray, in id order, with the same leaf kernel
 /// as the accelerated paths. Slow on purpose; the baseline every fast path is tested against.
@@ -56,7 +58,7 @@ impl<'a> BruteForce<'a> {
         }
         counter.ray();
         let mut best = Closest::new(ray.tmax);
-        TriRay::relative(ray, self.origin).closest_in(self.triangles, self.ids(), &mut best, counter);
+        TriRay::relative(ray, self.origin).closest_in(Baseline, self.triangles, self.ids(), &mut best, counter);
         best.hit
     }
 
@@ -66,7 +68,7 @@ impl<'a> BruteForce<'a> {
             return None;
         }
         counter.ray();
-        TriRay::relative(ray, self.origin).any_in(self.triangles, self.ids(), ray.tmax, counter)
+        TriRay::relative(ray, self.origin).any_in(Baseline, self.triangles, self.ids(), counter)
     }
 
     /// The first `max_hits` of every hit on `[tmin, tmax]`, in order of `t` then triangle id

@@ -23,14 +23,16 @@ use crate::ray::Ray;
 #[derive(Clone, Copy, Debug)]
 pub struct TriRay {
     /// The ray's origin, its components in the order `kx, ky, kz`.
-    org: [f64; 3],
+    pub(crate) org: [f64; 3],
     /// The axes of the sheared frame: `kz` the ray's dominant axis.
-    k: [usize; 3],
-    sx: f64,
-    sy: f64,
-    sz: f64,
+    pub(crate) k: [usize; 3],
+    pub(crate) sx: f64,
+    pub(crate) sy: f64,
+    pub(crate) sz: f64,
     /// The ray's `tmin`: hits before it are rejected.
     pub tmin: f64,
+    /// The ray's `tmax`: hits after it are rejected.
+    pub tmax: f64,
 }
 
 /// The result of one test: parameter and barycentrics of `v1` and `v2`.
@@ -74,17 +76,25 @@ impl TriRay {
         let org = [kx, ky, kz].map(|i| ray.org[i] as f64 - origin[i]);
         // One division: the shear is a product with its reciprocal (as the paper's code does).
         let sz = 1.0 / d[kz];
-        TriRay { org, k: [kx, ky, kz], sx: d[kx] * sz, sy: d[ky] * sz, sz, tmin: ray.tmin as f64 }
+        TriRay {
+            org,
+            k: [kx, ky, kz],
+            sx: d[kx] * sz,
+            sy: d[ky] * sz,
+            sz,
+            tmin: ray.tmin as f64,
+            tmax: ray.tmax as f64,
+        }
     }
 
     /// Tests one triangle; a hit must have `tmin ≤ t ≤ tmax`.
     #[inline(always)]
     pub fn intersect(&self, v0: [f32; 3], v1: [f32; 3], v2: [f32; 3], tmax: f32) -> Option<TriHit> {
-        self.candidate(&[v0, v1, v2])?.within(self.tmin, tmax)
+        self.candidate(&[v0, v1, v2])?.within(self.tmin, tmax as f64)
     }
 
     /// The test of one triangle up to its range test: where the ray's line meets the triangle,
-    /// if it does. The plain twin of [`Self::candidates`].
+    /// if it does. The plain twin of every vector test ([`crate::simd`]).
     #[inline(always)]
     pub(crate) fn candidate(&self, tri: &[[f32; 3]; 3]) -> Option<Candidate> {
         // Each vertex relative to the ray's origin, its components picked in the frame's order as
@@ -115,77 +125,25 @@ impl TriRay {
         let t = (u * az + v * bz + w * cz) * rcp;
         Some(Candidate { t, u: v * rcp, v: w * rcp })
     }
-
-    /// [`Self::candidate`] of two triangles at once, each lane of SSE2's two f64 lanes doing the
-    /// scalar operations of one triangle in the same order, so that both answers are the scalar
-    /// ones to the bit (IEEE operations round the same in a vector lane; nothing is fused).
-    #[cfg(target_arch = "x86_64")]
-    #[allow(unsafe_code)]
-    #[inline(always)]
-    pub(crate) fn candidates(&self, p: &[[f32; 3]; 3], q: &[[f32; 3]; 3]) -> [Option<Candidate>; 2] {
-        use std::arch::x86_64::*;
-        // SAFETY: these intrinsics need SSE2, which every x86-64 CPU has (it is in the target's
-        // baseline features); they read and write only their register arguments.
-        let (mask, t, u, v) = unsafe {
-            let [kx, ky, kz] = self.k;
-            let org = self.org.map(|o| _mm_set1_pd(o));
-            // Vertex `i`'s component `k` of both triangles (lane 0: `p`), relative to the origin.
-            let rel = |i: usize, k: usize, o: __m128d| _mm_sub_pd(_mm_set_pd(q[i][k] as f64, p[i][k] as f64), o);
-            let vertex = |i: usize| [rel(i, kx, org[0]), rel(i, ky, org[1]), rel(i, kz, org[2])];
-            let (a, b, c) = (vertex(0), vertex(1), vertex(2));
-            let (sx, sy) = (_mm_set1_pd(self.sx), _mm_set1_pd(self.sy));
-            let ax = _mm_sub_pd(a[0], _mm_mul_pd(sx, a[2]));
-            let ay = _mm_sub_pd(a[1], _mm_mul_pd(sy, a[2]));
-            let bx = _mm_sub_pd(b[0], _mm_mul_pd(sx, b[2]));
-            let by = _mm_sub_pd(b[1], _mm_mul_pd(sy, b[2]));
-            let cx = _mm_sub_pd(c[0], _mm_mul_pd(sx, c[2]));
-            let cy = _mm_sub_pd(c[1], _mm_mul_pd(sy, c[2]));
-
-            let u = _mm_sub_pd(_mm_mul_pd(cx, by), _mm_mul_pd(cy, bx));
-            let v = _mm_sub_pd(_mm_mul_pd(ax, cy), _mm_mul_pd(ay, cx));
-            let w = _mm_sub_pd(_mm_mul_pd(bx, ay), _mm_mul_pd(by, ax));
-            // Ordered comparisons: false for a NaN, as the scalar `<` and `>` are.
-            let zero = _mm_setzero_pd();
-            let neg = _mm_or_pd(_mm_or_pd(_mm_cmplt_pd(u, zero), _mm_cmplt_pd(v, zero)), _mm_cmplt_pd(w, zero));
-            let pos = _mm_or_pd(_mm_or_pd(_mm_cmpgt_pd(u, zero), _mm_cmpgt_pd(v, zero)), _mm_cmpgt_pd(w, zero));
-            let det = _mm_add_pd(_mm_add_pd(u, v), w);
-            let reject = _mm_or_pd(_mm_and_pd(neg, pos), _mm_cmpeq_pd(det, zero));
-            let mask = !_mm_movemask_pd(reject) & 0b11;
-            if mask == 0 {
-                return [None, None];
-            }
-            let sz = _mm_set1_pd(self.sz);
-            let (az, bz, cz) = (_mm_mul_pd(sz, a[2]), _mm_mul_pd(sz, b[2]), _mm_mul_pd(sz, c[2]));
-            let rcp = _mm_div_pd(_mm_set1_pd(1.0), det);
-            let sum = _mm_add_pd(_mm_add_pd(_mm_mul_pd(u, az), _mm_mul_pd(v, bz)), _mm_mul_pd(w, cz));
-            let lanes = |x: __m128d| -> [f64; 2] { [_mm_cvtsd_f64(x), _mm_cvtsd_f64(_mm_unpackhi_pd(x, x))] };
-            (mask, lanes(_mm_mul_pd(sum, rcp)), lanes(_mm_mul_pd(v, rcp)), lanes(_mm_mul_pd(w, rcp)))
-        };
-        std::array::from_fn(|i| (mask & 1 << i != 0).then(|| Candidate { t: t[i], u: u[i], v: v[i] }))
-    }
-
-    /// [`Self::candidate`] of two triangles, on targets without a vector twin.
-    #[cfg(not(target_arch = "x86_64"))]
-    #[inline(always)]
-    pub(crate) fn candidates(&self, p: &[[f32; 3]; 3], q: &[[f32; 3]; 3]) -> [Option<Candidate>; 2] {
-        [self.candidate(p), self.candidate(q)]
-    }
 }
 
 /// Where a ray's line meets a triangle, before the test of `t` against the ray's range: `t` and
 /// the barycentrics of `v1` and `v2`, in f64.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) struct Candidate {
-    pub(crate) t: f64,
-    pub(crate) u: f64,
-    pub(crate) v: f64,
+pub struct Candidate {
+    /// The ray parameter.
+    pub t: f64,
+    /// Barycentric weight of `v1`.
+    pub u: f64,
+    /// Barycentric weight of `v2`.
+    pub v: f64,
 }
 
 impl Candidate {
     /// The hit, rounded to f32, if `tmin ≤ t ≤ tmax` (compared before rounding).
     #[inline(always)]
-    pub(crate) fn within(self, tmin: f64, tmax: f32) -> Option<TriHit> {
-        if !(self.t >= tmin && self.t <= tmax as f64) {
+    pub(crate) fn within(self, tmin: f64, tmax: f64) -> Option<TriHit> {
+        if !(self.t >= tmin && self.t <= tmax) {
             return None;
         }
         Some(TriHit { t: self.t as f32, u: self.u as f32, v: self.v as f32 })

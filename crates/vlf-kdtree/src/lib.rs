@@ -27,7 +27,7 @@ mod build;
 mod tree;
 
 pub use tree::{KdNode, KdParams, KdTree, KdTreeStats, MAX_DEPTH, MAX_LINK};
-use vlf_geom::{Closest, Hit, Intersector, Ray, TriRay};
+use vlf_geom::{Baseline, Closest, Hit, Intersector, Ray, TriRay};
 pub use vlf_geom::{Counter, TraceStats};
 
 /// One traversal stack entry: a node still to visit and its ray-parameter interval.
@@ -198,11 +198,11 @@ impl KdTree {
             counter.leaf();
             let ids = self.references[n.references()].iter().copied();
             if ANY {
-                if let Some(hit) = tri_ray.any_in(tris, ids, ray.tmax, counter) {
+                if let Some(hit) = tri_ray.any_in(Baseline, tris, ids, counter) {
                     return Some(self.original(hit));
                 }
             } else {
-                tri_ray.closest_in(tris, ids, &mut best, counter);
+                tri_ray.closest_in(Baseline, tris, ids, &mut best, counter);
             }
             // Final once the best hit lies within the part of the ray already searched.
             if (best.hit.is_some() && best.tmax as f64 <= t1) || sp == 0 {

@@ -14,8 +14,8 @@
 //!   closest-hit query's stopping rule, for the `k`-th hit). Until then, the `k`-th hit's `t` is
 //!   the end of the interval still searched.
 //!
-//! Order: by `t`, then by triangle id. (The closest-hit query keeps the *last* of several hits at
-//! exactly the same `t`, in walk order; here the first of a tie is the smaller id.)
+//! Order: by `t`, then by triangle id, so the first hit is the closest-hit query's (which also
+//! takes the smaller id of a tie).
 
 // The view from its own module, not the crate root: `lib.rs` uses this module.
 use crate::query::FieldView;
@@ -27,8 +27,8 @@ struct Stored<'a>(&'a [TriangleRecord]);
 
 impl Triangles for Stored<'_> {
     #[inline(always)]
-    fn vertices(&self, id: u32) -> Option<[[f32; 3]; 3]> {
-        Some(self.0.get(id as usize)?.v)
+    fn vertices(&self, id: u32) -> Option<&[[f32; 3]; 3]> {
+        Some(&self.0.get(id as usize)?.v)
     }
 
     #[inline(always)]

@@ -14,7 +14,7 @@ use crate::filter::Passing;
 use crate::prefetch::prefetch;
 use crate::query::{FieldTriangles, FieldView, closest_in_refs, closest_refs};
 use crate::walk::{Leaf, Setup, Step, Walk};
-use vlf_geom::{Closest, Hit, Ray, TriRay};
+use vlf_geom::{Baseline, Closest, Hit, Ray, TriRay};
 
 /// Rays a batch keeps in flight: enough to cover a miss to memory (150–200 ns on the machines
 /// measured) with the steps of the others, few enough that their state stays in L1.
@@ -134,8 +134,8 @@ impl<'a> FieldView<'a> {
                 rays,
                 |_| None,
                 |_, leaf| leaf.passing(leaf.exit_t, &[]),
-                |tri_ray, ray, found, refs, _| {
-                    *found = tri_ray.any_in(&tris, refs, ray.tmax, &mut ());
+                |tri_ray, _, found, refs, _| {
+                    *found = tri_ray.any_in(Baseline, &tris, refs, &mut ());
                     found.is_some()
                 },
                 |i, found| out[i] = found.flatten().is_some(),

@@ -68,6 +68,7 @@ mod open_error;
 mod prefetch;
 mod query;
 mod scene;
+mod trace;
 mod walk;
 
 use std::fs::File;

@@ -29,20 +29,21 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use crate::filter::Passing;
+use crate::trace::{AnySearch, ClosestSearch, trace};
 use crate::walk::{Grid, Leaf, Setup, higher, lower, walk_leaves};
 use vlf_format::block::BOX_CELLS;
 use vlf_format::{FieldReader, LOOKUP_FLIP, LOOKUP_NONE, TriangleRecord, Z_LEVELS};
 use vlf_geom::frame::mul;
 use vlf_geom::lattice;
-use vlf_geom::{Closest, Counter, Hit, Ray, TriRay, Triangles};
+use vlf_geom::{Avx2, Baseline, Closest, Counter, Hit, Isa, Ray, TriRay, Triangles};
 
 /// The field's TRIANGLES section as the leaf kernel reads it.
 pub(crate) struct FieldTriangles<'a>(pub(crate) &'a [TriangleRecord]);
 
 impl Triangles for FieldTriangles<'_> {
     #[inline(always)]
-    fn vertices(&self, id: u32) -> Option<[[f32; 3]; 3]> {
-        Some(self.0.get(id as usize)?.v)
+    fn vertices(&self, id: u32) -> Option<&[[f32; 3]; 3]> {
+        Some(&self.0.get(id as usize)?.v)
     }
 
     #[inline(always)]
@@ -64,6 +65,8 @@ pub struct FieldView<'a> {
     box_hi: [f64; 3],
     /// Quantized beam levels per world unit: `1 / z_step`.
     levels_per_unit: f64,
+    /// AVX2, if the CPU has it: the single-ray queries are compiled for it.
+    avx2: Option<Avx2>,
 }
 
 impl<'a> FieldView<'a> {
@@ -88,6 +91,7 @@ impl<'a> FieldView<'a> {
             box_lo: s.aabb_min.map(|v| v - p.margin),
             box_hi: s.aabb_max.map(|v| v + p.margin),
             levels_per_unit: 1.0 / (2.0 * s.radius / Z_LEVELS as f64),
+            avx2: Avx2::detect(),
         }
     }
 
@@ -255,7 +259,7 @@ impl<'a> FieldView<'a> {
     }
 
     /// The closest hit of a ray given relative to `origin`, with the triangles read through
-    /// `tris`: steps 1 to 5.
+    /// `tris`: steps 1 to 5, compiled for AVX2 when the CPU has it.
     #[inline(never)]
     fn closest_with(
         &self,
@@ -264,31 +268,84 @@ impl<'a> FieldView<'a> {
         tris: &impl Triangles,
         counter: &mut impl Counter,
     ) -> Option<Hit> {
+        #[cfg(target_arch = "x86_64")]
+        if let Some(avx2) = self.avx2 {
+            // SAFETY: `avx2` exists only if the CPU supports AVX2 (`Avx2::detect`), which is
+            // what `closest_avx2` is compiled for; BMI1, BMI2, LZCNT and POPCNT come with every
+            // CPU that has AVX2 (x86-64-v3).
+            return unsafe { self.closest_avx2(avx2, ray, origin, tris, counter) };
+        }
+        self.closest_body(Baseline, ray, origin, tris, counter)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt")]
+    fn closest_avx2(
+        &self,
+        isa: Avx2,
+        ray: &Ray,
+        origin: [f64; 3],
+        tris: &impl Triangles,
+        counter: &mut impl Counter,
+    ) -> Option<Hit> {
+        self.closest_body(isa, ray, origin, tris, counter)
+    }
+
+    #[inline(always)]
+    fn closest_body(
+        &self,
+        isa: impl Isa,
+        ray: &Ray,
+        origin: [f64; 3],
+        tris: &impl Triangles,
+        counter: &mut impl Counter,
+    ) -> Option<Hit> {
         let setup = self.setup(ray, origin)?;
         counter.ray();
-        let tri_ray = TriRay::relative(ray, origin);
-        let mut best = Closest::new(ray.tmax);
-        walk_leaves(&self.reader, &self.grid, &setup, counter, |leaf, counter| {
-            let refs = closest_refs(leaf, &best, self.reader.triangles);
-            closest_in_refs(&tri_ray, tris, refs, leaf.exit_t, &mut best, counter)
-        });
-        best.hit
+        let mut search = ClosestSearch { isa, ray: TriRay::relative(ray, origin), tris, best: Closest::new(ray.tmax) };
+        trace(&self.reader, &self.grid, &setup, &mut search, counter);
+        search.best.hit
     }
 
     /// The first hit found of a ray given relative to `origin`, with the triangles read through
-    /// `tris`.
+    /// `tris`, compiled for AVX2 when the CPU has it.
     #[inline(never)]
     fn any_with(&self, ray: &Ray, origin: [f64; 3], tris: &impl Triangles, counter: &mut impl Counter) -> Option<Hit> {
+        #[cfg(target_arch = "x86_64")]
+        if let Some(avx2) = self.avx2 {
+            // SAFETY: as in `closest_with`.
+            return unsafe { self.any_avx2(avx2, ray, origin, tris, counter) };
+        }
+        self.any_body(Baseline, ray, origin, tris, counter)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt")]
+    fn any_avx2(
+        &self,
+        isa: Avx2,
+        ray: &Ray,
+        origin: [f64; 3],
+        tris: &impl Triangles,
+        counter: &mut impl Counter,
+    ) -> Option<Hit> {
+        self.any_body(isa, ray, origin, tris, counter)
+    }
+
+    #[inline(always)]
+    fn any_body(
+        &self,
+        isa: impl Isa,
+        ray: &Ray,
+        origin: [f64; 3],
+        tris: &impl Triangles,
+        counter: &mut impl Counter,
+    ) -> Option<Hit> {
         let setup = self.setup(ray, origin)?;
         counter.ray();
-        let tri_ray = TriRay::relative(ray, origin);
-        let mut found = None;
-        walk_leaves(&self.reader, &self.grid, &setup, counter, |leaf, counter| {
-            let refs = leaf.passing(leaf.exit_t, self.reader.triangles);
-            found = tri_ray.any_in(tris, refs, ray.tmax, counter);
-            found.is_some()
-        });
-        found
+        let mut search = AnySearch { isa, ray: TriRay::relative(ray, origin), tris, found: None };
+        trace(&self.reader, &self.grid, &setup, &mut search, counter);
+        search.found
     }
 
     /// [`Self::closest_hit_local`] with the triangles read through `tris` instead of the field's
@@ -350,7 +407,7 @@ pub(crate) fn closest_in_refs(
     best: &mut Closest,
     counter: &mut impl Counter,
 ) -> bool {
-    tri_ray.closest_in(tris, refs, best, counter);
+    tri_ray.closest_in(Baseline, tris, refs, best, counter);
     best.hit.is_some() && (best.tmax as f64) <= exit_t
 }
 

@@ -72,7 +72,7 @@ pub(crate) struct Setup {
 impl Setup {
     /// The ray parameter at which the beam coordinate reaches quantized `level`.
     #[inline(always)]
-    fn t_at(&self, level: u16) -> f64 {
+    pub(crate) fn t_at(&self, level: u16) -> f64 {
         (level as f64 - self.oq) * self.inv_dq
     }
 }

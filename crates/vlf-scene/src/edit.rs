@@ -119,11 +119,11 @@ fn bit(bits: &[u64], id: u32) -> bool {
 
 impl Triangles for Kept<'_> {
     #[inline(always)]
-    fn vertices(&self, id: u32) -> Option<[[f32; 3]; 3]> {
+    fn vertices(&self, id: u32) -> Option<&[[f32; 3]; 3]> {
         if bit(self.removed, id) {
             return None;
         }
-        Some(self.tris.get(id as usize)?.v)
+        Some(&self.tris.get(id as usize)?.v)
     }
 
     #[inline(always)]
@@ -369,7 +369,11 @@ impl EditedField {
         if let Some(o) = self.live_overlay() {
             let shorter = Ray { tmax: best.tmax, ..*ray };
             let tris = Kept { tris: &o.sections().triangles, removed: &[] };
-            if let Some(h) = o.view().closest_hit_local_in(&shorter, &tris, counter) {
+            // An inserted triangle's id is above every mapped one, so at the same `t` the mapped
+            // hit stays (`Closest::take`: the smaller id wins a tie).
+            if let Some(h) = o.view().closest_hit_local_in(&shorter, &tris, counter)
+                && best.hit.is_none_or(|b| h.t < b.t)
+            {
                 best.hit = Some(Hit { prim: h.prim + self.base.triangle_count(), ..h });
             }
         }

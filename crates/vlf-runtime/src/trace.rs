@@ -1,0 +1,397 @@
+//! The single-ray walk (steps 3 and 4 of [`crate::query`]) as one loop nest: the tiles a ray's
+//! projection crosses, front to back; in each the leaves its z range passes through; in each leaf
+//! the refs whose boxes meet the ray's box, four at a time into the triangle kernel.
+
+// Comparisons are written `!(a <= b)` on purpose: a NaN (from a lying file) takes the reject
+// branch.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
+use crate::filter::{Limits, pass_mask, segment_limits};
+use crate::prefetch::prefetch;
+use crate::walk::{Grid, Setup, entry_leaf, higher, lower};
+use vlf_format::block::{Block, header_bytes};
+use vlf_format::{EMPTY_TILE, FieldReader};
+use vlf_geom::kernel::FILLER;
+use vlf_geom::{Closest, Counter, Hit, Isa, Tri, TriRay, Triangles};
+
+/// What the walk does with the triangles that pass a leaf's box test.
+pub(crate) trait Search<'t> {
+    /// Where the triangles are.
+    type Tris: Triangles + ?Sized + 't;
+    /// The triangles.
+    fn tris(&self) -> &'t Self::Tris;
+    /// Tests the first `n` of four triangles; returns whether the search is over.
+    fn test4<C: Counter>(&mut self, ids: [u32; 4], tris: [&'t Tri; 4], n: usize, counter: &mut C) -> bool;
+    /// The end of the interval still searched.
+    fn limit(&self) -> f64;
+    /// Whether the search is over once the ray has searched up to `exit`.
+    fn done(&self, exit: f64) -> bool;
+}
+
+/// The closest-hit search.
+pub(crate) struct ClosestSearch<'t, I, T: ?Sized> {
+    pub(crate) isa: I,
+    pub(crate) ray: TriRay,
+    pub(crate) tris: &'t T,
+    pub(crate) best: Closest,
+}
+
+impl<'t, I: Isa, T: Triangles + ?Sized + 't> Search<'t> for ClosestSearch<'t, I, T> {
+    type Tris = T;
+    #[inline(always)]
+    fn tris(&self) -> &'t T {
+        self.tris
+    }
+    #[inline(always)]
+    fn test4<C: Counter>(&mut self, ids: [u32; 4], tris: [&'t Tri; 4], n: usize, counter: &mut C) -> bool {
+        for _ in 0..n {
+            counter.test();
+        }
+        self.ray.closest4(self.isa, ids, tris, n, &mut self.best);
+        false
+    }
+    #[inline(always)]
+    fn limit(&self) -> f64 {
+        self.best.tmax as f64
+    }
+    #[inline(always)]
+    fn done(&self, exit: f64) -> bool {
+        self.best.hit.is_some() && (self.best.tmax as f64) <= exit
+    }
+}
+
+/// The any-hit search.
+pub(crate) struct AnySearch<'t, I, T: ?Sized> {
+    pub(crate) isa: I,
+    pub(crate) ray: TriRay,
+    pub(crate) tris: &'t T,
+    pub(crate) found: Option<Hit>,
+}
+
+impl<'t, I: Isa, T: Triangles + ?Sized + 't> Search<'t> for AnySearch<'t, I, T> {
+    type Tris = T;
+    #[inline(always)]
+    fn tris(&self) -> &'t T {
+        self.tris
+    }
+    #[inline(always)]
+    fn test4<C: Counter>(&mut self, ids: [u32; 4], tris: [&'t Tri; 4], n: usize, counter: &mut C) -> bool {
+        let found = self.ray.any4(self.isa, ids, tris, n);
+        for _ in 0..found.map_or(n, |(i, _)| i + 1) {
+            counter.test();
+        }
+        self.found = found.map(|(_, h)| h);
+        self.found.is_some()
+    }
+    #[inline(always)]
+    fn limit(&self) -> f64 {
+        f64::INFINITY
+    }
+    #[inline(always)]
+    fn done(&self, _exit: f64) -> bool {
+        self.found.is_some()
+    }
+}
+
+/// Cache lines of refs started loading when a ray enters a tile, from its entry leaf on.
+const PREFETCH_LINES: usize = 8;
+
+/// Up to four triangles waiting for the kernel.
+struct Pending<'t> {
+    ids: [u32; 4],
+    tris: [&'t Tri; 4],
+    n: usize,
+}
+
+/// Walks the ray `s` through the tiles and leaves of the field of `reader` (whose grid is `g`)
+/// front to back, handing the triangles whose boxes meet it to `search` until the search is over.
+#[inline(always)]
+pub(crate) fn trace<'t, C: Counter, S: Search<'t>>(
+    reader: &FieldReader<'_>,
+    g: &Grid,
+    s: &Setup,
+    search: &mut S,
+    counter: &mut C,
+) {
+    let Some(beam) = reader.beams.get(s.dir) else { return };
+    let n = g.n;
+    let ni = n as i64;
+    let Some(tiles) = reader.tiles.get(n * n * s.dir..n * n * (s.dir + 1)) else { return };
+    let lbase = beam.leaves_base as usize;
+    let (w, r) = (g.tile_width, g.radius);
+    // Tile coordinates of the entry point, clamped: the grown scene pokes out of the grid by
+    // at most the margin, where no triangle lies. (Truncation is floor under the clamp.)
+    let cell = |v: f64| (((v + r) * g.inv_tile_width) as i64).clamp(0, ni - 1);
+    let mut ix = cell(s.o[0] + s.t0 * s.d[0]);
+    let mut iy = cell(s.o[1] + s.t0 * s.d[1]);
+    // The next tile boundary on each axis and the step between boundaries (Amanatides and
+    // Woo): one division per axis.
+    let axis = |i: i64, o: f64, d: f64| -> (i64, f64, f64) {
+        let inv = 1.0 / d;
+        if d > 0.0 {
+            (1, ((i + 1) as f64 * w - r - o) * inv, w * inv)
+        } else if d < 0.0 {
+            (-1, (i as f64 * w - r - o) * inv, -w * inv)
+        } else {
+            (0, f64::INFINITY, f64::INFINITY)
+        }
+    };
+    let (step_x, mut next_x, delta_x) = axis(ix, s.o[0], s.d[0]);
+    let (step_y, mut next_y, delta_y) = axis(iy, s.o[1], s.d[1]);
+    let mut t_enter = s.t0;
+    // Each step moves one axis monotonically, so 2n + 1 visits cover any segment.
+    let mut visits = 2 * n + 1;
+    let cpu = g.cells_per_unit;
+    let margin = g.margin * cpu;
+    let (dcx, dcy) = (s.d[0] * cpu, s.d[1] * cpu);
+    let tris = search.tris();
+    while visits > 0 {
+        visits -= 1;
+        counter.cell();
+        let t_exit = lower(lower(next_x, next_y), s.t1);
+        let more = t_exit < s.t1;
+        let (nx, ny) = if next_x <= next_y { (ix + step_x, iy) } else { (ix, iy + step_y) };
+        let ahead = more && (0..ni).contains(&nx) && (0..ni).contains(&ny);
+        // Start loading the block of the tile after this one, while this one is visited.
+        if ahead
+            && let Some(&e) = tiles.get(ny as usize * n + nx as usize)
+            && e != EMPTY_TILE
+            && let Some(word) = reader.leaves.get(lbase.wrapping_add(e as usize))
+        {
+            prefetch(word);
+        }
+        let entry = tiles.get(iy as usize * n + ix as usize).copied().unwrap_or(EMPTY_TILE);
+        if entry != EMPTY_TILE
+            && let Some(words) = reader.leaves.get(lbase.wrapping_add(entry as usize)..)
+            && let Some(block) = Block::parse(words)
+        {
+            let corner = [-r + ix as f64 * w, -r + iy as f64 * w];
+            let ray = CellRay { o: [(s.o[0] - corner[0]) * cpu, (s.o[1] - corner[1]) * cpu], d: [dcx, dcy], margin };
+            if visit_tile(&block, s, &ray, t_enter, t_exit, tris, search, counter) {
+                return;
+            }
+        }
+        if !ahead {
+            return;
+        }
+        if next_x <= next_y {
+            t_enter = next_x;
+            next_x += delta_x;
+        } else {
+            t_enter = next_y;
+            next_y += delta_y;
+        }
+        (ix, iy) = (nx, ny);
+    }
+}
+
+/// The ray over one tile in its box cells: at parameter `t` it is at `o + t·d` cells from the
+/// tile's corner; `margin` is the margin `μ` in cells.
+#[derive(Clone, Copy)]
+struct CellRay {
+    o: [f64; 2],
+    d: [f64; 2],
+    margin: f64,
+}
+
+impl CellRay {
+    /// The limits of the box of cells the ray passes over `[ta, tb]`, grown by the margin.
+    #[inline(always)]
+    fn limits(&self, ta: f64, tb: f64) -> Limits {
+        let (o, d) = (self.o, self.d);
+        segment_limits([o[0] + ta * d[0], o[1] + ta * d[1]], [o[0] + tb * d[0], o[1] + tb * d[1]], self.margin)
+    }
+}
+
+/// Visits the leaves of `block` that the ray `s` passes through over `[t_enter, t_exit]`, front to
+/// back; returns whether the search is over.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn visit_tile<'t, C: Counter, S: Search<'t>>(
+    block: &Block<'_>,
+    s: &Setup,
+    ray: &CellRay,
+    t_enter: f64,
+    t_exit: f64,
+    tris: &'t S::Tris,
+    search: &mut S,
+    counter: &mut C,
+) -> bool {
+    let bounds = block.bounds();
+    let ends = block.ends();
+    let k = block.leaf_count();
+    let m = block.ref_count();
+    // The parameter range over which the ray is within the tile's z range.
+    let (ta, tb) = if s.up { (s.t_at(bounds[0]), s.t_at(bounds[k])) } else { (s.t_at(bounds[k]), s.t_at(bounds[0])) };
+    let lo = higher(t_enter, ta);
+    let hi = lower(t_exit, tb);
+    if !(lo <= hi) {
+        return false;
+    }
+    // The leaf holding the entry point; then the next one along the ray, until it leaves.
+    let mut leaf = entry_leaf(&bounds[1..k], s.oq + lo * s.dq, s.up);
+    let mut enter = lo;
+    let hdr = header_bytes(k);
+    {
+        // Start loading the refs of the entry leaf and of the leaves after it, in the ray's
+        // order: on a field larger than the cache, they are misses to memory that would
+        // otherwise come one after the other.
+        let lines = PREFETCH_LINES;
+        let bytes = block.bytes();
+        let start = hdr + 8 * if leaf == 0 { 0 } else { ends[leaf - 1] as usize };
+        let end = hdr + 8 * ends[leaf] as usize;
+        for i in 0..lines {
+            let at = if s.up { start + 64 * i } else { end.wrapping_sub(64 * i + 1) };
+            if let Some(b) = bytes.get(at) {
+                prefetch(b);
+            }
+        }
+    }
+    loop {
+        let (bound, last) = if s.up { (leaf + 1, leaf + 1 >= k) } else { (leaf, leaf == 0) };
+        let exit = if last { hi } else { lower(s.t_at(bounds[bound]), hi) };
+        counter.leaf();
+        let start = if leaf == 0 { 0 } else { ends[leaf - 1] as usize };
+        let end = ends[leaf] as usize;
+        if start < end && end <= m {
+            let limits = ray.limits(enter, lower(exit, search.limit()));
+            if visit_leaf(block, hdr + 8 * start, end - start, limits, tris, search, counter) || search.done(exit) {
+                return true;
+            }
+        }
+        if last || exit >= hi {
+            return false;
+        }
+        enter = exit;
+        leaf = if s.up { leaf + 1 } else { leaf - 1 };
+    }
+}
+
+/// Tests the `c` refs of the leaf whose arrays start at byte `at` of `block`: those whose boxes
+/// pass `limits` go to the kernel four at a time. Returns whether the search is over.
+#[inline(always)]
+fn visit_leaf<'t, C: Counter, S: Search<'t>>(
+    block: &Block<'_>,
+    at: usize,
+    c: usize,
+    limits: Limits,
+    tris: &'t S::Tris,
+    search: &mut S,
+    counter: &mut C,
+) -> bool {
+    let bytes = block.bytes();
+    // The ids: quarter `at / 4 + c + i` (the arrays start on a multiple of 4; `Block::parse`
+    // checked that the leaf's `8c` bytes lie within the section).
+    let Some(ids) = block.quarters().get(at / 4 + c..at / 4 + 2 * c) else { return false };
+    let mut passing = Candidates::new();
+    let mut g = 0;
+    while g < c {
+        // The box test, sixteen refs per step, into a list of ids (in a loop of its own, apart
+        // from the kernel, so that both keep their values in registers).
+        let mut mask = pass_mask(&lanes(bytes, at + g, c), limits);
+        if c - g < 16 {
+            mask &= (1 << (c - g)) - 1;
+        }
+        while mask != 0 {
+            let i = g + mask.trailing_zeros() as usize;
+            mask &= mask - 1;
+            if let Some(&id) = ids.get(i) {
+                passing.push(id);
+            }
+        }
+        g += 16;
+        if passing.len() > CANDIDATES - 16 || g >= c {
+            if test_all(passing.as_slice(), tris, search, counter) {
+                return true;
+            }
+            passing.clear();
+        }
+    }
+    false
+}
+
+/// Tests the triangles `ids`, four at a time; returns whether the search is over.
+#[inline(always)]
+fn test_all<'t, C: Counter, S: Search<'t>>(ids: &[u32], tris: &'t S::Tris, search: &mut S, counter: &mut C) -> bool {
+    // Start loading them all before the first test.
+    for &id in ids {
+        if let Some(t) = tris.vertices(id) {
+            prefetch(t);
+        }
+    }
+    let mut p = Pending { ids: [0; 4], tris: [&FILLER; 4], n: 0 };
+    for &id in ids {
+        let Some(tri) = tris.vertices(id) else { continue };
+        p.ids[p.n] = id;
+        p.tris[p.n] = tri;
+        p.n += 1;
+        if p.n == 4 {
+            if search.test4(p.ids, p.tris, 4, counter) {
+                return true;
+            }
+            p.n = 0;
+        }
+    }
+    p.n > 0 && search.test4(p.ids, p.tris, p.n, counter)
+}
+
+/// The most passing refs a leaf hands to the kernel at once.
+const CANDIDATES: usize = 64;
+
+/// A short list of triangle ids, not initialised beyond its length.
+struct Candidates {
+    ids: [std::mem::MaybeUninit<u32>; CANDIDATES],
+    len: usize,
+}
+
+impl Candidates {
+    #[inline(always)]
+    fn new() -> Self {
+        Candidates { ids: [std::mem::MaybeUninit::uninit(); CANDIDATES], len: 0 }
+    }
+
+    /// Appends `id`; ignored when full (callers empty it while it has room for sixteen more).
+    #[inline(always)]
+    fn push(&mut self, id: u32) {
+        if let Some(slot) = self.ids.get_mut(self.len) {
+            slot.write(id);
+            self.len += 1;
+        }
+    }
+
+    #[inline(always)]
+    fn len(&self) -> usize {
+        self.len
+    }
+
+    #[inline(always)]
+    fn clear(&mut self) {
+        self.len = 0;
+    }
+
+    #[inline(always)]
+    fn as_slice(&self) -> &[u32] {
+        let written = &self.ids[..self.len];
+        // SAFETY: `push` wrote each of the first `len` entries (and `len` never exceeds the
+        // capacity); `MaybeUninit<u32>` has the layout of `u32`.
+        unsafe { &*(written as *const [std::mem::MaybeUninit<u32>] as *const [u32]) }
+    }
+}
+
+/// Sixteen bytes of each of the four box arrays of a leaf of `c` refs whose arrays start at byte
+/// `at` of `bytes`, from the ref at `at` on; 255 (a box no ray box passes) past the end of `bytes`.
+/// Bytes past the leaf's refs are whatever follows; the caller masks them.
+#[inline(always)]
+fn lanes(bytes: &[u8], at: usize, c: usize) -> [[u8; 16]; 4] {
+    match bytes.get(at..at + 3 * c + 16) {
+        // One bounds check for the four arrays.
+        Some(w) => std::array::from_fn(|a| w[a * c..a * c + 16].try_into().expect("16 bytes")),
+        None => std::array::from_fn(|a| {
+            let mut lane = [255u8; 16];
+            let tail = bytes.get(at + a * c..).unwrap_or(&[]);
+            let n = tail.len().min(16);
+            lane[..n].copy_from_slice(&tail[..n]);
+            lane
+        }),
+    }
+}
