@@ -22,7 +22,7 @@ pub use camera::Camera;
 pub use kernel::{Closest, Triangles};
 pub use lattice::Lattice;
 pub use ray::{Counter, Hit, Intersector, Ray, TraceStats};
-pub use simd::{Avx2, Baseline, Isa, Tri};
+pub use simd::{Avx2, Avx512, Baseline, Isa, Tri};
 pub use triangle::{Candidate, TriHit, TriRay, is_degenerate};
 
 /// The reference intersector: every triangle, every ray, in id order, with the same leaf kernel

@@ -110,6 +110,46 @@ pub(crate) fn candidates2(ray: &TriRay, p: &Tri, q: &Tri) -> [Option<Candidate>;
     [ray.candidate(p), ray.candidate(q)]
 }
 
+/// AVX-512 (F, VL, BW and DQ, with AVX2): the four-triangle test of [`Avx2`], for code compiled
+/// with the 32 vector registers AVX-512 brings (the runtime's queries keep more of their state in
+/// registers). Only [`Avx512::detect`] makes one.
+#[derive(Clone, Copy, Debug)]
+pub struct Avx512(());
+
+impl Avx512 {
+    /// The token, if this CPU supports AVX-512 F, VL, BW and DQ and AVX2 (always `None` off
+    /// x86-64).
+    pub fn detect() -> Option<Avx512> {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx512f")
+            && std::arch::is_x86_feature_detected!("avx512vl")
+            && std::arch::is_x86_feature_detected!("avx512bw")
+            && std::arch::is_x86_feature_detected!("avx512dq")
+            && std::arch::is_x86_feature_detected!("avx2")
+        {
+            return Some(Avx512(()));
+        }
+        None
+    }
+
+    /// The AVX2 token: a CPU with this one has AVX2.
+    pub fn avx2(self) -> Avx2 {
+        Avx2(())
+    }
+}
+
+impl Isa for Avx512 {
+    #[inline(always)]
+    fn candidates4(self, ray: &TriRay, tris: [&Tri; 4]) -> [Option<Candidate>; 4] {
+        self.avx2().candidates4(ray, tris)
+    }
+
+    #[inline(always)]
+    fn candidates_first(self, ray: &TriRay, tris: [&Tri; 4], n: usize) -> [Option<Candidate>; 4] {
+        self.avx2().candidates_first(ray, tris, n)
+    }
+}
+
 /// AVX2: four triangles per instruction. Only [`Avx2::detect`] makes one.
 #[derive(Clone, Copy, Debug)]
 pub struct Avx2(());

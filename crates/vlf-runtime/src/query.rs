@@ -35,7 +35,7 @@ use vlf_format::block::BOX_CELLS;
 use vlf_format::{FieldReader, LOOKUP_FLIP, LOOKUP_NONE, TriangleRecord, Z_LEVELS};
 use vlf_geom::frame::mul;
 use vlf_geom::lattice;
-use vlf_geom::{Avx2, Baseline, Closest, Counter, Hit, Isa, Ray, TriRay, Triangles};
+use vlf_geom::{Avx2, Avx512, Baseline, Closest, Counter, Hit, Isa, Ray, TriRay, Triangles};
 
 /// The field's TRIANGLES section as the leaf kernel reads it.
 pub(crate) struct FieldTriangles<'a>(pub(crate) &'a [TriangleRecord]);
@@ -65,8 +65,29 @@ pub struct FieldView<'a> {
     box_hi: [f64; 3],
     /// Quantized beam levels per world unit: `1 / z_step`.
     levels_per_unit: f64,
-    /// AVX2, if the CPU has it: the single-ray queries are compiled for it.
-    avx2: Option<Avx2>,
+    /// The widest instructions the CPU has, which the single-ray queries are compiled for.
+    isa: Tier,
+}
+
+/// The instruction sets the single-ray queries are compiled for, widest first; a query runs the
+/// widest the CPU has.
+#[derive(Clone, Copy, Debug)]
+enum Tier {
+    Avx512(Avx512),
+    Avx2(Avx2),
+    Baseline,
+}
+
+impl Tier {
+    /// The widest tier this CPU supports; `VLF_ISA=baseline` or `avx2` caps it (to compare them).
+    fn detect() -> Tier {
+        let cap = std::env::var("VLF_ISA").unwrap_or_default();
+        match (Avx512::detect(), Avx2::detect()) {
+            (Some(isa), _) if cap.is_empty() || cap == "avx512" => Tier::Avx512(isa),
+            (_, Some(isa)) if cap != "baseline" => Tier::Avx2(isa),
+            _ => Tier::Baseline,
+        }
+    }
 }
 
 impl<'a> FieldView<'a> {
@@ -91,7 +112,7 @@ impl<'a> FieldView<'a> {
             box_lo: s.aabb_min.map(|v| v - p.margin),
             box_hi: s.aabb_max.map(|v| v + p.margin),
             levels_per_unit: 1.0 / (2.0 * s.radius / Z_LEVELS as f64),
-            avx2: Avx2::detect(),
+            isa: Tier::detect(),
         }
     }
 
@@ -269,13 +290,30 @@ impl<'a> FieldView<'a> {
         counter: &mut impl Counter,
     ) -> Option<Hit> {
         #[cfg(target_arch = "x86_64")]
-        if let Some(avx2) = self.avx2 {
-            // SAFETY: `avx2` exists only if the CPU supports AVX2 (`Avx2::detect`), which is
-            // what `closest_avx2` is compiled for; BMI1, BMI2, LZCNT and POPCNT come with every
-            // CPU that has AVX2 (x86-64-v3).
-            return unsafe { self.closest_avx2(avx2, ray, origin, tris, counter) };
+        match self.isa {
+            // SAFETY: `Avx512` exists only if the CPU supports AVX-512 F, VL, BW and DQ and AVX2
+            // (`Avx512::detect`), which is what `closest_avx512` is compiled for; BMI1, BMI2,
+            // LZCNT and POPCNT come with every CPU that has AVX2 (x86-64-v3).
+            Tier::Avx512(isa) => return unsafe { self.closest_avx512(isa, ray, origin, tris, counter) },
+            // SAFETY: `Avx2` exists only if the CPU supports AVX2 (`Avx2::detect`), which is what
+            // `closest_avx2` is compiled for, with BMI1, BMI2, LZCNT and POPCNT as above.
+            Tier::Avx2(isa) => return unsafe { self.closest_avx2(isa, ray, origin, tris, counter) },
+            Tier::Baseline => {}
         }
         self.closest_body(Baseline, ray, origin, tris, counter)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt,avx512f,avx512vl,avx512bw,avx512dq")]
+    fn closest_avx512(
+        &self,
+        isa: Avx512,
+        ray: &Ray,
+        origin: [f64; 3],
+        tris: &impl Triangles,
+        counter: &mut impl Counter,
+    ) -> Option<Hit> {
+        self.closest_body(isa, ray, origin, tris, counter)
     }
 
     #[cfg(target_arch = "x86_64")]
@@ -312,11 +350,27 @@ impl<'a> FieldView<'a> {
     #[inline(never)]
     fn any_with(&self, ray: &Ray, origin: [f64; 3], tris: &impl Triangles, counter: &mut impl Counter) -> Option<Hit> {
         #[cfg(target_arch = "x86_64")]
-        if let Some(avx2) = self.avx2 {
+        match self.isa {
             // SAFETY: as in `closest_with`.
-            return unsafe { self.any_avx2(avx2, ray, origin, tris, counter) };
+            Tier::Avx512(isa) => return unsafe { self.any_avx512(isa, ray, origin, tris, counter) },
+            // SAFETY: as in `closest_with`.
+            Tier::Avx2(isa) => return unsafe { self.any_avx2(isa, ray, origin, tris, counter) },
+            Tier::Baseline => {}
         }
         self.any_body(Baseline, ray, origin, tris, counter)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt,avx512f,avx512vl,avx512bw,avx512dq")]
+    fn any_avx512(
+        &self,
+        isa: Avx512,
+        ray: &Ray,
+        origin: [f64; 3],
+        tris: &impl Triangles,
+        counter: &mut impl Counter,
+    ) -> Option<Hit> {
+        self.any_body(isa, ray, origin, tris, counter)
     }
 
     #[cfg(target_arch = "x86_64")]
