@@ -68,6 +68,7 @@ mod open_error;
 mod prefetch;
 mod query;
 mod scene;
+mod setup;
 mod trace;
 mod walk;
 
