@@ -22,7 +22,7 @@ use std::path::{Path, PathBuf};
 use vlf_bake::generate::Rng;
 use vlf_bake::{BakeConfig, DepthPolicy, NoProgress, Scene};
 use vlf_geom::{BruteForce, Hit, Intersector, Ray};
-use vlf_runtime::{Field, Interleave};
+use vlf_runtime::{Field, InstructionSet, Interleave, TraceStats};
 
 /// The workspace's `fixtures/` directory.
 pub fn fixtures() -> PathBuf {
@@ -160,6 +160,10 @@ pub struct Tally {
     /// A batch query (interleaved, in turn or automatic) differs from the single-ray query on
     /// the same ray (`t`, `prim`, `u`, `v` bit for bit, or any-hit): counted by [`check_batches`].
     pub batch_mismatches: u64,
+    /// The single-ray query run with another instruction set this CPU supports differs
+    /// (`t`, `prim`, `u`, `v` bit for bit, the any-hit answer, or the work counted): counted by
+    /// [`check_instruction_sets`].
+    pub isa_mismatches: u64,
     pub examples: Vec<String>,
 }
 
@@ -171,6 +175,7 @@ impl Tally {
         self.kernel_mismatches += o.kernel_mismatches;
         self.ambiguous += o.ambiguous;
         self.batch_mismatches += o.batch_mismatches;
+        self.isa_mismatches += o.isa_mismatches;
         self.examples.extend(o.examples.into_iter().take(5usize.saturating_sub(self.examples.len())));
     }
 }
@@ -242,12 +247,20 @@ pub fn compare(accel: &dyn Intersector, tris: &[[[f32; 3]; 3]], origin: [f64; 3]
 /// Asserts zero mismatches and reports the counts.
 pub fn assert_exact(label: &str, tally: &Tally) {
     println!(
-        "{label}: {} rays, {} hits, {} mismatches, {} kernel mismatches, {} ambiguous (grazing), {} batch mismatches",
-        tally.rays, tally.hits, tally.mismatches, tally.kernel_mismatches, tally.ambiguous, tally.batch_mismatches
+        "{label}: {} rays, {} hits, {} mismatches, {} kernel mismatches, {} ambiguous (grazing), {} batch mismatches, \
+         {} instruction-set mismatches",
+        tally.rays,
+        tally.hits,
+        tally.mismatches,
+        tally.kernel_mismatches,
+        tally.ambiguous,
+        tally.batch_mismatches,
+        tally.isa_mismatches
     );
     assert_eq!(tally.mismatches, 0, "{label}: field differs from brute force: {:#?}", tally.examples);
     assert_eq!(tally.kernel_mismatches, 0, "{label}: f32 kernel differs from the f64 oracle: {:#?}", tally.examples);
     assert_eq!(tally.batch_mismatches, 0, "{label}: a batch query differs from the single ray: {:#?}", tally.examples);
+    assert_eq!(tally.isa_mismatches, 0, "{label}: another instruction set gives another answer: {:#?}", tally.examples);
 }
 
 /// Runs `rays` through the field's batch queries in every [`Interleave`] mode and counts, into
@@ -270,6 +283,34 @@ pub fn check_batches(field: &Field, rays: &[Ray], tally: &mut Tally) {
                     tally.examples.push(format!(
                         "ray {ray:?}: batch ({how:?}) {:?} any={}, single ray {:?}",
                         closest[i], any[i], single[i]
+                    ));
+                }
+            }
+        }
+    }
+}
+
+/// Runs `rays` through the single-ray queries with every instruction set this CPU supports
+/// ([`vlf_runtime::InstructionSet::supported`]) and counts, into `tally`, the rays on which one
+/// differs from the field's default (the widest): the closest hit's `t`, `prim`, `u` and `v` bit
+/// for bit, the any-hit answer, and the tiles, leaves and triangle tests counted.
+pub fn check_instruction_sets(field: &Field, rays: &[Ray], tally: &mut Tally) {
+    let widest = field.view();
+    let key = |h: Option<Hit>| h.map(|h| (h.t.to_bits(), h.prim, h.u.to_bits(), h.v.to_bits()));
+    for set in InstructionSet::supported() {
+        let view = widest.with_instruction_set(set);
+        assert_eq!(view.instruction_set(), set, "{set:?} is supported, so the view uses it");
+        for ray in rays {
+            let (mut a, mut b) = (TraceStats::default(), TraceStats::default());
+            let want = (key(widest.closest_hit_counted(ray, &mut a)), key(widest.any_hit_counted(ray, &mut a)));
+            let got = (key(view.closest_hit_counted(ray, &mut b)), key(view.any_hit_counted(ray, &mut b)));
+            if got != want || a != b {
+                tally.isa_mismatches += 1;
+                if tally.examples.len() < 5 {
+                    tally.examples.push(format!(
+                        "ray {ray:?}: {} gives {got:?} ({b:?}), {} {want:?} ({a:?})",
+                        set.name(),
+                        widest.instruction_set().name()
                     ));
                 }
             }
@@ -408,6 +449,7 @@ pub fn check_field(label: &str, field: &Field, scene: &[[[f32; 3]; 3]], per_fami
     for (family, rays) in ray_families(field, per_family, seed) {
         let mut tally = compare(field, &tris, field.origin(), &rays);
         check_batches(field, &rays, &mut tally);
+        check_instruction_sets(field, &rays, &mut tally);
         assert_exact(&format!("{label} / {family}"), &tally);
         total.add(tally);
     }

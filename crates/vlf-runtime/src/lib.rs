@@ -85,7 +85,7 @@ pub use open_error::OpenError;
 /// Rays per work item of the parallel batch queries.
 #[cfg(feature = "rayon")]
 const PAR_CHUNK: usize = 1024;
-pub use query::FieldView;
+pub use query::{FieldView, InstructionSet};
 use scene::SceneSections;
 pub use scene::{CameraProjection, LightKind, Material, SceneCamera, SceneLight};
 pub use vlf_format::pack::PackedLayout;

@@ -63,8 +63,45 @@ pub struct FieldView<'a> {
     isa: Tier,
 }
 
-/// The instruction sets the single-ray queries are compiled for, widest first; a query runs the
-/// widest the CPU has.
+/// An instruction set the single-ray queries are compiled for. Every one gives the same answers,
+/// bit for bit; they differ in speed only ([`FieldView::with_instruction_set`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum InstructionSet {
+    /// What every CPU of the target has: SSE2 on x86-64 (two triangles per vector), plain
+    /// scalar code elsewhere.
+    Baseline,
+    /// x86-64 with AVX2, BMI1, BMI2, LZCNT and POPCNT (x86-64-v3): four triangles per vector.
+    Avx2,
+    /// x86-64-v3 with AVX-512 F, VL, BW and DQ: the same kernel, with twice the vector registers.
+    Avx512,
+}
+
+impl InstructionSet {
+    /// Its name: `baseline`, `avx2` or `avx512` (the values of `VLF_ISA`).
+    pub fn name(self) -> &'static str {
+        match self {
+            InstructionSet::Baseline => "baseline",
+            InstructionSet::Avx2 => "avx2",
+            InstructionSet::Avx512 => "avx512",
+        }
+    }
+
+    /// The instruction set named `name` (`baseline`, `avx2` or `avx512`).
+    pub fn from_name(name: &str) -> Option<InstructionSet> {
+        [InstructionSet::Baseline, InstructionSet::Avx2, InstructionSet::Avx512].into_iter().find(|i| i.name() == name)
+    }
+
+    /// Every instruction set this CPU supports, narrowest first.
+    pub fn supported() -> Vec<InstructionSet> {
+        [InstructionSet::Baseline, InstructionSet::Avx2, InstructionSet::Avx512]
+            .into_iter()
+            .filter(|&i| Tier::widest(i).set() == i)
+            .collect()
+    }
+}
+
+/// The instruction sets the single-ray queries are compiled for, each with the token that proves
+/// the CPU has it.
 #[derive(Clone, Copy, Debug)]
 enum Tier {
     Avx512(Avx512),
@@ -73,13 +110,26 @@ enum Tier {
 }
 
 impl Tier {
-    /// The widest tier this CPU supports; `VLF_ISA=baseline` or `avx2` caps it (to compare them).
-    fn detect() -> Tier {
-        let cap = std::env::var("VLF_ISA").unwrap_or_default();
+    /// The widest tier this CPU supports, up to `cap`.
+    fn widest(cap: InstructionSet) -> Tier {
         match (Avx512::detect(), Avx2::detect()) {
-            (Some(isa), _) if cap.is_empty() || cap == "avx512" => Tier::Avx512(isa),
-            (_, Some(isa)) if cap != "baseline" => Tier::Avx2(isa),
+            (Some(isa), _) if cap >= InstructionSet::Avx512 => Tier::Avx512(isa),
+            (_, Some(isa)) if cap >= InstructionSet::Avx2 => Tier::Avx2(isa),
             _ => Tier::Baseline,
+        }
+    }
+
+    /// The widest tier this CPU supports, up to the one `VLF_ISA` names if it is set.
+    fn detect() -> Tier {
+        let cap = std::env::var("VLF_ISA").ok().and_then(|name| InstructionSet::from_name(&name));
+        Tier::widest(cap.unwrap_or(InstructionSet::Avx512))
+    }
+
+    fn set(self) -> InstructionSet {
+        match self {
+            Tier::Avx512(_) => InstructionSet::Avx512,
+            Tier::Avx2(_) => InstructionSet::Avx2,
+            Tier::Baseline => InstructionSet::Baseline,
         }
     }
 }
@@ -104,6 +154,21 @@ impl<'a> FieldView<'a> {
             center: s.center,
             isa: Tier::detect(),
         }
+    }
+
+    /// The instruction set the single-ray queries run with: the widest this CPU supports, or
+    /// narrower if the environment variable `VLF_ISA` (`baseline`, `avx2`, `avx512`) asked for it
+    /// when the field was opened.
+    pub fn instruction_set(&self) -> InstructionSet {
+        self.isa.set()
+    }
+
+    /// This view with its single-ray queries run with at most `cap` (the widest this CPU supports
+    /// otherwise): the answers are the same, bit for bit, only the speed differs. For comparing
+    /// them, or for CPUs that slow their clock down for wide vectors.
+    pub fn with_instruction_set(mut self, cap: InstructionSet) -> Self {
+        self.isa = Tier::widest(cap);
+        self
     }
 
     /// The point the field's triangles are stored relative to: the centre of its scene, in world
