@@ -50,6 +50,18 @@ fn cpu_model() -> String {
         .unwrap_or_else(|| "unknown CPU".into())
 }
 
+/// The instruction set a field opened now runs its single-ray queries with: the widest this CPU
+/// supports, or the one `VLF_ISA` caps it to.
+fn field_instruction_set() -> &'static str {
+    let widest = vlf_runtime::InstructionSet::supported().last().copied();
+    let cap = std::env::var("VLF_ISA").ok().and_then(|n| vlf_runtime::InstructionSet::from_name(&n));
+    match (widest, cap) {
+        (Some(w), Some(c)) => w.min(c).name(),
+        (Some(w), None) => w.name(),
+        (None, _) => "baseline",
+    }
+}
+
 /// The contestants compiled into this binary, in table order.
 pub fn contestants() -> Vec<String> {
     let mut v = vec!["field".to_string(), "field batch".to_string()];
@@ -68,7 +80,12 @@ impl Report {
         Report {
             command: cfg.command.clone(),
             date: command_output("date", &["-u", "+%Y-%m-%d %H:%M UTC"]),
-            machine: format!("{}, {}", cpu_model(), command_output("uname", &["-sr"])),
+            machine: format!(
+                "{}, {}; the field's single-ray queries compiled for {}",
+                cpu_model(),
+                command_output("uname", &["-sr"]),
+                field_instruction_set()
+            ),
             cores: std::thread::available_parallelism().map_or(1, |n| n.get()),
             contestants: contestants(),
             resolution: cfg.resolution,
