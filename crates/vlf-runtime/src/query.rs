@@ -11,8 +11,10 @@
 //!    pass reach the watertight triangle kernel.
 //! 5. Stop as soon as the best hit lies within the part of the ray already searched.
 //!
-//! Steps 1, 2 and 5 are here; steps 3 and 4 are the cursor of [`crate::walk`], which
-//! [`crate::batch`] also runs for several rays at once.
+//! Steps 1 and 2 are [`crate::setup`]; steps 3 to 5 the single-ray walk of [`crate::trace`] (and,
+//! for several rays at once, the cursor of [`crate::walk`] that [`crate::batch`] runs). This
+//! module holds the view and the queries' entry points, each compiled for every instruction set
+//! of [`InstructionSet`] and run with the widest the CPU has.
 //!
 //! Triangles are stored relative to the scene's centre, and the ray is moved there first (in f64),
 //! so a scene far from the world's origin keeps its precision ([`FieldView::closest_hit_local`]

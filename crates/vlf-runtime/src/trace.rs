@@ -1,6 +1,21 @@
-//! The single-ray walk (steps 3 and 4 of [`crate::query`]) as one loop nest: the tiles a ray's
-//! projection crosses, front to back; in each the leaves its z range passes through; in each leaf
-//! the refs whose boxes meet the ray's box, four at a time into the triangle kernel.
+//! The single-ray walk (steps 3 to 5 of [`crate::query`]) as one loop nest: the tiles a ray's
+//! projection crosses, front to back (Amanatides and Woo 1987 in the tile grid); in each the leaves
+//! of its block (`formats/vlf.md` §5.6) that the ray's z range passes through, in ray order; in
+//! each leaf the refs whose boxes meet the ray's box, collected into a short list apart from the
+//! kernel (so that the filter's loop and the kernel's each keep their values in registers), their
+//! triangles started loading together, then tested four at a time by the leaf kernel
+//! ([`vlf_geom::TriRay::closest4`], [`vlf_geom::TriRay::any4`]). The search stops once the best hit
+//! lies within the part of the ray already searched (closest hit) or at the first hit (any hit).
+//!
+//! It visits the tiles and leaves that [`crate::walk`]'s parts visit, in the same order, but is
+//! written out on its own, without closures: it is compiled inside the queries built for AVX2 and
+//! AVX-512 (a closure's body, if not inlined, would be compiled without those instructions), and
+//! the parts assembled measured 5–20% slower (`docs/benchmarks/where-the-time-goes.md`).
+//!
+//! Geometry here is in f64: its rounding stays far below the margin `μ` by which the baker grew
+//! every footprint, z range and box (`formats/vlf.md` §6.2). Every index read from the file is
+//! bounds-checked where it is used: a lying file yields wrong answers at worst, never a panic or
+//! unbounded work (a ray visits at most `2n + 1` tiles and, in each, at most its `K` leaves).
 
 // Comparisons are written `!(a <= b)` on purpose: a NaN (from a lying file) takes the reject
 // branch.

@@ -3,11 +3,14 @@
 //! (`formats/vlf.md` §5.6) that the ray's z range passes through, in ray order.
 //!
 //! The walk comes in two forms over the same parts (the grid step [`Dda`], a direction's tiles
-//! [`Beam`], a tile's leaves [`Tile`]): a single query runs it as plain loops
-//! ([`walk_leaves`]), whose state the compiler keeps in registers; a batch ([`crate::batch`])
-//! runs it as a resumable cursor ([`Walk`]), so that it can advance several rays in turn and start
-//! loading what each one needs next before coming back to it, and their cache misses overlap.
-//! Both see the same tiles and leaves in the same order, so they give the same answers.
+//! [`Beam`], a tile's leaves [`Tile`]): plain loops ([`walk_leaves`], for the all-hits queries and
+//! [`crate::FieldView::for_each_leaf`]), and a resumable cursor ([`Walk`]) that a batch
+//! ([`crate::batch`]) advances for several rays in turn, starting to load what each one needs next
+//! before coming back to it, so that their cache misses overlap. The single-ray closest-hit and
+//! any-hit queries run the same tiles and leaves in the same order as a loop nest of their own
+//! ([`crate::trace`], measured faster than these parts assembled). All see the same tiles and
+//! leaves in the same order, and the closest hit does not depend on the order of the tests
+//! ([`vlf_geom::Closest::take`]), so they give the same answers.
 //!
 //! Geometry here is in f64: its rounding stays far below the margin `μ` by which the baker grew
 //! every footprint, z range and box (`formats/vlf.md` §6.2). Every index read from the file is
