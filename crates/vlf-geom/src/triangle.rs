@@ -96,7 +96,7 @@ impl TriRay {
     /// The test of one triangle up to its range test: where the ray's line meets the triangle,
     /// if it does. The plain twin of every vector test ([`crate::simd`]).
     #[inline(always)]
-    pub(crate) fn candidate(&self, tri: &[[f32; 3]; 3]) -> Option<Candidate> {
+    pub fn candidate(&self, tri: &[[f32; 3]; 3]) -> Option<Candidate> {
         // Each vertex relative to the ray's origin, its components picked in the frame's order as
         // they are read (indexing the vertex in memory, not an array of registers).
         let [ox, oy, oz] = self.org;
