@@ -102,9 +102,10 @@ fn golden_cornell_field() {
 fn automatic_parameters_change_only_with_the_baker_revision() {
     let bunny = import::import_paths(&[fixtures().join("meshes/bunny.obj")]).unwrap();
     let random = |n: usize, size: f64| Scene::from_triangles("random", &generate::random_cube(n, size, 1)).unwrap();
-    // 20,000 small triangles in a ball a tenth of the scene's size, and one triangle at each end
-    // of a diagonal: few tiles, each crossed by hundreds of triangles (the dense tiles of a scan).
-    let mut tris = generate::random_cube(20_000, 0.004, 1);
+    // 40,000 small triangles in a ball a tenth of the scene's size, and one triangle at each end
+    // of a diagonal: few tiles, each crossed by about a thousand triangles (the dense tiles of a
+    // scan), which the choice refines.
+    let mut tris = generate::random_cube(40_000, 0.004, 1);
     for t in &mut tris {
         *t = t.map(|v| v.map(|c| c * 0.1));
     }

@@ -23,8 +23,10 @@ use vlf_geom::frame::frame;
 /// automatic parameters' ladder to 51 and 73 directions (`crate::params::LADDER`): a bake that
 /// asks for automatic parameters may now get a different field for the same request. Revision 6
 /// raises the leaf heuristic's cost of visiting a leaf from 1.5 to 2.5 triangle tests
-/// (`formats/vlf.md` §6.3): fewer, longer leaves.
-pub const BAKER_REVISION: u32 = 6;
+/// (`formats/vlf.md` §6.3): fewer, longer leaves. Revision 7 refines the automatic parameters'
+/// tiles to 128² only above 750 triangles per non-empty 64² tile, not 400
+/// (`crate::params::DENSE_TILE_LOAD`).
+pub const BAKER_REVISION: u32 = 7;
 
 /// The input hash of `formats/vlf.md` §3.2.
 pub fn input_hash(scene: &Scene, request: &Request) -> [u8; 32] {

@@ -46,9 +46,13 @@ pub const LADDER: [(u32, u32); 7] = [(2, 16), (2, 32), (2, 64), (3, 64), (4, 64)
 /// Triangles per non-empty tile above which the automatic choice refines the ladder's tiles to
 /// [`DENSE_TILES`], if that fits the budget. Measured (`docs/benchmarks/parameters.md`): on the
 /// Stanford dragon (825 triangles per non-empty 64² tile) 19 × 128² tiles traced inside and
-/// incoherent rays 1.6–1.8× faster than 19 × 64² at the same size, and the 1M random scene of
-/// shrinking triangles (700) gained too; the 100K random scenes (96 and 154) did not.
-pub const DENSE_TILE_LOAD: f64 = 400.0;
+/// incoherent rays 1.6–1.8× faster than 19 × 64² at the same size; the 100K random scenes (96
+/// and 154) did not gain. Baker revision 7 raised it from 400 to 750 when the query tested four
+/// triangles at a time (`docs/benchmarks/where-the-time-goes.md`, 2026-12-04): the 1M random scene
+/// of shrinking triangles (695) then traced faster at 73 × 64² than at 51 × 128² (outside +5%,
+/// inside +8%, incoherent +12%), while the dragon (822) and the 1M scene of fixed size (1,648)
+/// stayed faster at 128² (dragon inside +25% at 51 directions, 1M fixed inside +26% at 9).
+pub const DENSE_TILE_LOAD: f64 = 750.0;
 
 /// The tiles per side that dense tiles are refined to.
 pub const DENSE_TILES: u32 = 128;
