@@ -432,6 +432,26 @@ pub fn ray_families(field: &Field, per_family: usize, seed: u64) -> Vec<(&'stati
         })
         .collect();
     fams.push(("aimed at vertices, edge midpoints and centroids", aimed));
+
+    // What a renderer traces after a hit: rays leaving a point on a triangle, to a light (the
+    // segment short of both ends, as shadow rays are) or in any direction (a bounce). Any-hit
+    // searches put off the leaf such a ray starts in (`vlf-runtime`'s `OriginLeaf`).
+    let leaving: Vec<Ray> = (0..per_family)
+        .map(|_| {
+            let t = &tris[(rng.next_u64() % tris.len() as u64) as usize];
+            let (a, b) = (rng.unit(), rng.unit());
+            let (a, b) = if a + b > 1.0 { (1.0 - a, 1.0 - b) } else { (a, b) };
+            let o: [f64; 3] = std::array::from_fn(|k| t[0][k] + a * (t[1][k] - t[0][k]) + b * (t[2][k] - t[0][k]));
+            if rng.unit() < 0.5 {
+                let light = in_ball(&mut rng, c, 3.0 * r);
+                Ray::with_interval(to_f32(o), to_f32(sub(light, o)), 1e-4, 1.0 - 1e-4)
+            } else {
+                let d = unit(&mut rng);
+                Ray::with_interval(to_f32(o), to_f32(d), (1e-4 * r) as f32, f32::INFINITY)
+            }
+        })
+        .collect();
+    fams.push(("leaving a point on a triangle", leaving));
     fams
 }
 

@@ -7,8 +7,10 @@
 //! ([`Walk::step`]), which starts loading what that ray reads next, then turns to the next ray,
 //! and comes back to the first when its data has had time to arrive (asynchronous memory access
 //! chaining: Kocberber et al., "Asynchronous Memory Access Chaining", VLDB 2015). Each ray sees
-//! the same leaves in the same order and runs the same leaf tests as a single query, so a batch
-//! gives the same answers, bit for bit, in the rays' order.
+//! the same leaves in the same order and runs the same leaf tests as a single closest-hit query,
+//! so a batch gives the same answers, bit for bit, in the rays' order. (An interleaved any-hit ray
+//! searches the leaf it starts in first, where the single query searches it last: the answer,
+//! whether anything is hit, is the same.)
 
 use crate::filter::Passing;
 use crate::prefetch::prefetch;

@@ -6,6 +6,8 @@
 //! triangles started loading together, then tested four at a time by the leaf kernel
 //! ([`vlf_geom::TriRay::closest4`], [`vlf_geom::TriRay::any4`]). The search stops once the best hit
 //! lies within the part of the ray already searched (closest hit) or at the first hit (any hit).
+//! An any-hit search puts off the leaf where the ray starts until the rest is searched
+//! ([`OriginLeaf`]): a shadow ray's occluder is seldom in the surface it leaves.
 //!
 //! It visits the tiles and leaves that [`crate::walk`]'s parts visit, in the same order, but is
 //! written out on its own, without closures: it is compiled inside the queries built for AVX2 and
@@ -41,6 +43,8 @@ pub(crate) trait Search<'t> {
     fn limit(&self) -> f64;
     /// Whether the search is over once the ray has searched up to `exit`.
     fn done(&self, exit: f64) -> bool;
+    /// Whether the leaf where the ray starts is searched last ([`OriginLeaf`]).
+    const DEFER_ORIGIN: bool;
 }
 
 /// The closest-hit search.
@@ -73,6 +77,7 @@ impl<'t, I: Isa, T: Triangles + ?Sized + 't> Search<'t> for ClosestSearch<'t, I,
     fn done(&self, exit: f64) -> bool {
         self.best.hit.is_some() && (self.best.tmax as f64) <= exit
     }
+    const DEFER_ORIGIN: bool = false;
 }
 
 /// The any-hit search.
@@ -106,6 +111,7 @@ impl<'t, I: Isa, T: Triangles + ?Sized + 't> Search<'t> for AnySearch<'t, I, T> 
     fn done(&self, _exit: f64) -> bool {
         self.found.is_some()
     }
+    const DEFER_ORIGIN: bool = true;
 }
 
 /// Cache lines of refs started loading when a ray enters a tile, from its entry leaf on.
@@ -160,44 +166,76 @@ pub(crate) fn trace<'t, C: Counter, S: Search<'t>>(
     let margin = g.margin * cpu;
     let (dcx, dcy) = (s.d[0] * cpu, s.d[1] * cpu);
     let tris = search.tris();
-    while visits > 0 {
-        visits -= 1;
-        counter.cell();
-        let t_exit = lower(lower(next_x, next_y), s.t1);
-        let more = t_exit < s.t1;
-        let (nx, ny) = if next_x <= next_y { (ix + step_x, iy) } else { (ix, iy + step_y) };
-        let ahead = more && (0..ni).contains(&nx) && (0..ni).contains(&ny);
-        // Start loading the block of the tile after this one, while this one is visited.
-        if ahead
-            && let Some(&e) = tiles.get(ny as usize * n + nx as usize)
-            && e != EMPTY_TILE
-            && let Some(word) = reader.leaves.get(lbase.wrapping_add(e as usize))
-        {
-            prefetch(word);
-        }
-        let entry = tiles.get(iy as usize * n + ix as usize).copied().unwrap_or(EMPTY_TILE);
-        if entry != EMPTY_TILE
-            && let Some(words) = reader.leaves.get(lbase.wrapping_add(entry as usize)..)
-            && let Some(block) = Block::parse(words)
-        {
-            let corner = [-r + ix as f64 * w, -r + iy as f64 * w];
-            let ray = CellRay { o: [(s.o[0] - corner[0]) * cpu, (s.o[1] - corner[1]) * cpu], d: [dcx, dcy], margin };
-            if visit_tile(&block, s, &ray, t_enter, t_exit, tris, search, counter) {
-                return;
+    let mut origin = OriginLeaf { undecided: S::DEFER_ORIGIN, deferred: None };
+    let over = 'walk: {
+        while visits > 0 {
+            visits -= 1;
+            counter.cell();
+            let t_exit = lower(lower(next_x, next_y), s.t1);
+            let more = t_exit < s.t1;
+            let (nx, ny) = if next_x <= next_y { (ix + step_x, iy) } else { (ix, iy + step_y) };
+            let ahead = more && (0..ni).contains(&nx) && (0..ni).contains(&ny);
+            // Start loading the block of the tile after this one, while this one is visited.
+            if ahead
+                && let Some(&e) = tiles.get(ny as usize * n + nx as usize)
+                && e != EMPTY_TILE
+                && let Some(word) = reader.leaves.get(lbase.wrapping_add(e as usize))
+            {
+                prefetch(word);
             }
+            let entry = tiles.get(iy as usize * n + ix as usize).copied().unwrap_or(EMPTY_TILE);
+            if entry != EMPTY_TILE
+                && let Some(words) = reader.leaves.get(lbase.wrapping_add(entry as usize)..)
+                && let Some(block) = Block::parse(words)
+            {
+                let corner = [-r + ix as f64 * w, -r + iy as f64 * w];
+                let ray =
+                    CellRay { o: [(s.o[0] - corner[0]) * cpu, (s.o[1] - corner[1]) * cpu], d: [dcx, dcy], margin };
+                if visit_tile(&block, s, &ray, t_enter, t_exit, tris, search, counter, &mut origin) {
+                    break 'walk true;
+                }
+            }
+            if !ahead {
+                break 'walk false;
+            }
+            if next_x <= next_y {
+                t_enter = next_x;
+                next_x += delta_x;
+            } else {
+                t_enter = next_y;
+                next_y += delta_y;
+            }
+            (ix, iy) = (nx, ny);
         }
-        if !ahead {
-            return;
-        }
-        if next_x <= next_y {
-            t_enter = next_x;
-            next_x += delta_x;
-        } else {
-            t_enter = next_y;
-            next_y += delta_y;
-        }
-        (ix, iy) = (nx, ny);
+        false
+    };
+    if !over && let Some(d) = origin.deferred {
+        visit_leaf(&d.block, d.at, d.c, d.limits, tris, search, counter);
     }
+}
+
+/// The leaf where a ray starts, which an any-hit search tests last.
+///
+/// A shadow or secondary ray starts on a surface, and the leaf it starts in holds that surface's
+/// triangles around the origin: their boxes meet the ray's box over the leaf (which starts at the
+/// origin), yet the ray leaves them behind (their hits, if any, lie before `tmin`). On the dragon's
+/// shadow rays this leaf took 11.4 of a ray's 25.8 triangle tests, and the occluder lay in a later
+/// leaf. An any-hit search may return any hit, so searching this leaf after the rest of the ray
+/// changes which hit is found, never whether one is: it is tested only if nothing else is hit.
+struct OriginLeaf<'r> {
+    /// No leaf with refs visited yet (and the search defers one).
+    undecided: bool,
+    /// The leaf put off: its refs start at byte `at` of `block`, `c` of them, and the ray's box over
+    /// it is `limits`.
+    deferred: Option<Deferred<'r>>,
+}
+
+/// A leaf whose search waits until the rest of the ray is searched.
+struct Deferred<'r> {
+    block: Block<'r>,
+    at: usize,
+    c: usize,
+    limits: Limits,
 }
 
 /// The ray over one tile in its box cells: at parameter `t` it is at `o + t·d` cells from the
@@ -222,8 +260,8 @@ impl CellRay {
 /// back; returns whether the search is over.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-fn visit_tile<'t, C: Counter, S: Search<'t>>(
-    block: &Block<'_>,
+fn visit_tile<'t, 'r, C: Counter, S: Search<'t>>(
+    block: &Block<'r>,
     s: &Setup,
     ray: &CellRay,
     t_enter: f64,
@@ -231,6 +269,7 @@ fn visit_tile<'t, C: Counter, S: Search<'t>>(
     tris: &'t S::Tris,
     search: &mut S,
     counter: &mut C,
+    origin: &mut OriginLeaf<'r>,
 ) -> bool {
     let bounds = block.bounds();
     let ends = block.ends();
@@ -270,7 +309,16 @@ fn visit_tile<'t, C: Counter, S: Search<'t>>(
         let end = ends[leaf] as usize;
         if start < end && end <= m {
             let limits = ray.limits(enter, lower(exit, search.limit()));
-            if visit_leaf(block, hdr + 8 * start, end - start, limits, tris, search, counter) || search.done(exit) {
+            // The first leaf with refs, if the ray starts in it, is put off (`OriginLeaf`).
+            let defer = S::DEFER_ORIGIN && origin.undecided && enter == s.t0;
+            if S::DEFER_ORIGIN {
+                origin.undecided = false;
+            }
+            if defer {
+                origin.deferred = Some(Deferred { block: *block, at: hdr + 8 * start, c: end - start, limits });
+            } else if visit_leaf(block, hdr + 8 * start, end - start, limits, tris, search, counter)
+                || search.done(exit)
+            {
                 return true;
             }
         }

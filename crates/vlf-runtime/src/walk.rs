@@ -8,9 +8,11 @@
 //! ([`crate::batch`]) advances for several rays in turn, starting to load what each one needs next
 //! before coming back to it, so that their cache misses overlap. The single-ray closest-hit and
 //! any-hit queries run the same tiles and leaves in the same order as a loop nest of their own
-//! ([`crate::trace`], measured faster than these parts assembled). All see the same tiles and
-//! leaves in the same order, and the closest hit does not depend on the order of the tests
-//! ([`vlf_geom::Closest::take`]), so they give the same answers.
+//! ([`crate::trace`], measured faster than these parts assembled; its any-hit search puts off the
+//! leaf the ray starts in until the rest is searched). All see the same tiles and leaves, closest
+//! hits in the same order, and the closest hit does not depend on the order of the tests
+//! ([`vlf_geom::Closest::take`]) nor whether anything is hit on the order of the leaves, so they
+//! give the same answers.
 //!
 //! Geometry here is in f64: its rounding stays far below the margin `μ` by which the baker grew
 //! every footprint, z range and box (`formats/vlf.md` §6.2). Every index read from the file is
