@@ -374,7 +374,8 @@ impl Field {
     }
 
     /// Whether `ray` hits anything on `[tmin, tmax]` (a shadow ray); `false` for an invalid ray.
-    /// The walk of [`Field::closest_hit`], stopping at the first hit found. Allocates nothing.
+    /// The walk of [`Field::closest_hit`], stopping at the first hit found; the leaf the ray starts
+    /// in, which holds the surface a shadow ray leaves, is searched last. Allocates nothing.
     #[inline]
     pub fn any_hit(&self, ray: &Ray) -> bool {
         self.view().any_hit(ray)

@@ -229,7 +229,8 @@ impl<'a> FieldView<'a> {
         self.any_hit_counted(ray, &mut ()).is_some()
     }
 
-    /// The first hit found on `[tmin, tmax]` (not necessarily the closest), counting the work.
+    /// The first hit found on `[tmin, tmax]` (not necessarily the closest), counting the work:
+    /// the walk of [`Self::closest_hit`], with the leaf the ray starts in searched last.
     pub fn any_hit_counted(&self, ray: &Ray, counter: &mut impl Counter) -> Option<Hit> {
         self.any(ray, self.center, counter)
     }
