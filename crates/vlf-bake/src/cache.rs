@@ -262,10 +262,10 @@ impl Cache {
             }
             Err(problem) => {
                 drop(tmp);
-                if let (Ok(opened), Ok(now)) = (entry.metadata(), std::fs::metadata(&path)) {
-                    if same_file(&opened, &now) {
-                        let _ = std::fs::remove_file(&path);
-                    }
+                if let (Ok(opened), Ok(now)) = (entry.metadata(), std::fs::metadata(&path))
+                    && same_file(&opened, &now)
+                {
+                    let _ = std::fs::remove_file(&path);
                 }
                 Ok(Lookup::Unusable {
                     problem: format!("cache entry {} is unusable and was removed: {problem}", path.display()),
@@ -352,10 +352,10 @@ impl Cache {
         let mut targets = std::collections::BTreeSet::new();
         for item in std::fs::read_dir(&self.dir)? {
             let name = item?.file_name().to_string_lossy().into_owned();
-            if let Some(target) = name.strip_prefix('.').and_then(|n| Some(&n[..n.strip_suffix(".tmp")?.rfind('.')?])) {
-                if is_entry_name(target).is_some() {
-                    targets.insert(target.to_string());
-                }
+            if let Some(target) = name.strip_prefix('.').and_then(|n| Some(&n[..n.strip_suffix(".tmp")?.rfind('.')?]))
+                && is_entry_name(target).is_some()
+            {
+                targets.insert(target.to_string());
             }
         }
         for target in targets {

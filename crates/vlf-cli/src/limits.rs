@@ -25,24 +25,24 @@ pub fn check_disk(path: &Path, needed: u64, at_most: bool, what: &str) -> Result
     }
     let dir = parent_dir(path);
     let needs = if at_most { "needs up to" } else { "needs" };
-    if let Some(free) = free_space(&dir) {
-        if needed > free {
-            bail!(
-                "{what} {needs} {} but the file system of {} has {} free",
-                human_bytes(needed),
-                dir.display(),
-                human_bytes(free)
-            );
-        }
+    if let Some(free) = free_space(&dir)
+        && needed > free
+    {
+        bail!(
+            "{what} {needs} {} but the file system of {} has {} free",
+            human_bytes(needed),
+            dir.display(),
+            human_bytes(free)
+        );
     }
-    if let Some(limit) = file_size_limit() {
-        if needed > limit {
-            bail!(
-                "{what} {needs} {} but this process may not write files over {} (ulimit -f)",
-                human_bytes(needed),
-                human_bytes(limit)
-            );
-        }
+    if let Some(limit) = file_size_limit()
+        && needed > limit
+    {
+        bail!(
+            "{what} {needs} {} but this process may not write files over {} (ulimit -f)",
+            human_bytes(needed),
+            human_bytes(limit)
+        );
     }
     Ok(())
 }

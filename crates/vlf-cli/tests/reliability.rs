@@ -219,10 +219,10 @@ fn a_bake_killed_midway_leaves_the_previous_field_intact_and_its_temporary_file_
         .unwrap();
     let deadline = Instant::now() + Duration::from_secs(300);
     let temp = loop {
-        if let Some(t) = temp_files(dir.path(), "scene.vlf").pop() {
-            if std::fs::metadata(&t).map_or(0, |m| m.len()) >= 16 << 20 {
-                break t;
-            }
+        if let Some(t) = temp_files(dir.path(), "scene.vlf").pop()
+            && std::fs::metadata(&t).map_or(0, |m| m.len()) >= 16 << 20
+        {
+            break t;
         }
         if let Some(status) = child.try_wait().unwrap() {
             panic!("the bake ended ({status}) before it could be killed midway");

@@ -365,10 +365,10 @@ mod with_zstd {
     pub fn unpack_in_memory(bytes: &[u8], max_bytes: Option<u64>) -> Result<Unpacked, FormatError> {
         let (header, table) = parse_head(bytes, bytes.len() as u64)?;
         let (raw_header, raw_table) = unpacked_layout(&header, &table)?;
-        if let Some(limit) = max_bytes {
-            if raw_header.file_length > limit {
-                return Err(FormatError::UnpackedTooLarge { bytes: raw_header.file_length, limit });
-            }
+        if let Some(limit) = max_bytes
+            && raw_header.file_length > limit
+        {
+            return Err(FormatError::UnpackedTooLarge { bytes: raw_header.file_length, limit });
         }
         let mut buf = crate::AlignedBytes::zeroed(raw_header.file_length)?;
         let head = head_bytes(&raw_header, &raw_table);

@@ -191,10 +191,10 @@ pub fn check_table(head_and_table: &[u8], file_length: u64) -> Result<Vec<Sectio
                 e.raw_length, e.element_size
             )));
         }
-        if let Some(kind) = SectionKind::from_u32(e.kind) {
-            if e.element_size != kind.element_size() {
-                return Err(bad(format!("element_size is {}, the spec says {}", e.element_size, kind.element_size())));
-            }
+        if let Some(kind) = SectionKind::from_u32(e.kind)
+            && e.element_size != kind.element_size()
+        {
+            return Err(bad(format!("element_size is {}, the spec says {}", e.element_size, kind.element_size())));
         }
         if let Some(first) = table[..index].iter().position(|p| p.kind == e.kind) {
             return Err(FormatError::DuplicateSection { kind: kind_name(e.kind), first, second: index });

@@ -116,7 +116,7 @@ impl FieldFile {
     /// Appends a section of any kind number and element size from bytes in memory (a section this
     /// crate does not know, carried over from another file, or a shard's SHARD record).
     pub fn append_kind(&mut self, kind: u32, element_size: u32, bytes: &[u8]) -> io::Result<()> {
-        if element_size == 0 || bytes.len() as u64 % element_size as u64 != 0 {
+        if element_size == 0 || !(bytes.len() as u64).is_multiple_of(element_size as u64) {
             return Err(invalid(format!("section {} is not a whole number of elements", kind_name(kind))));
         }
         let (index, offset) = self.place(kind, element_size, bytes.len() as u64)?;
@@ -204,7 +204,7 @@ impl FieldFile {
             e.raw_length = w.written;
             self.end = w.start + w.written;
         }
-        if e.raw_length % e.element_size as u64 != 0 {
+        if !e.raw_length.is_multiple_of(e.element_size as u64) {
             return Err(invalid(format!("section {} is not a whole number of elements", kind_name(e.kind))));
         }
         e.raw_hash = *w.hasher.finalize().as_bytes();
@@ -268,10 +268,10 @@ impl SectionWriter {
 
 impl Write for SectionWriter {
     fn write(&mut self, data: &[u8]) -> io::Result<usize> {
-        if let Some(len) = self.reserved {
-            if self.written + data.len() as u64 > len {
-                return Err(invalid(format!("write past the end of a {len}-byte reserved section")));
-            }
+        if let Some(len) = self.reserved
+            && self.written + data.len() as u64 > len
+        {
+            return Err(invalid(format!("write past the end of a {len}-byte reserved section")));
         }
         // `written` counts buffered bytes too; the buffer holds the last `buf.len()` of them.
         if self.buf.len() + data.len() > BUFFER {

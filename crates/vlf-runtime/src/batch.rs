@@ -207,18 +207,11 @@ impl<'a> FieldView<'a> {
             while let Some(ray) = rays.get(*next) {
                 let index = *next;
                 *next += 1;
-                if let Some(setup) = self.setup(ray, origin) {
-                    if let Some(walk) = Walk::new(&self.reader, &self.grid, &setup) {
-                        let tri_ray = TriRay::relative(ray, origin);
-                        return Some(Lane {
-                            index,
-                            setup,
-                            walk,
-                            tri_ray,
-                            state: start(ray),
-                            pending: Pending::Nothing,
-                        });
-                    }
+                if let Some(setup) = self.setup(ray, origin)
+                    && let Some(walk) = Walk::new(&self.reader, &self.grid, &setup)
+                {
+                    let tri_ray = TriRay::relative(ray, origin);
+                    return Some(Lane { index, setup, walk, tri_ray, state: start(ray), pending: Pending::Nothing });
                 }
                 finish(index, None);
             }

@@ -460,12 +460,12 @@ pub(crate) fn walk_leaves<'a, C: Counter>(
         counter.cell();
         // Start loading the next tile's block while this one is visited.
         beam.prefetch_block(g, dda.ahead(s));
-        if let Some(at) = beam.entry(g, dda.ix, dda.iy).and_then(|e| beam.block_at(e)) {
-            if let Some(mut tile) = beam.tile(at, g, s, &dda) {
-                while let Some(leaf) = tile.next(s, counter) {
-                    if visit(&leaf, counter) {
-                        return;
-                    }
+        if let Some(at) = beam.entry(g, dda.ix, dda.iy).and_then(|e| beam.block_at(e))
+            && let Some(mut tile) = beam.tile(at, g, s, &dda)
+        {
+            while let Some(leaf) = tile.next(s, counter) {
+                if visit(&leaf, counter) {
+                    return;
                 }
             }
         }

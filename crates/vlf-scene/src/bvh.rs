@@ -167,10 +167,10 @@ impl Bvh {
         self.leaves = items.len();
         self.builds += 1;
         self.depth = 0;
-        if let Some(max) = items.iter().map(|i| i.0).max() {
-            if self.leaf_of.len() <= max as usize {
-                self.leaf_of.resize(max as usize + 1, NONE);
-            }
+        if let Some(max) = items.iter().map(|i| i.0).max()
+            && self.leaf_of.len() <= max as usize
+        {
+            self.leaf_of.resize(max as usize + 1, NONE);
         }
         if !items.is_empty() {
             let mut work: Vec<(u32, Aabb)> = items.to_vec();

@@ -95,15 +95,15 @@ impl Default for BakeConfig {
 impl BakeConfig {
     /// Checks ranges; the CLI calls it so bad flags fail before any work.
     pub fn validate(&self) -> Result<(), ParamsError> {
-        if let Some(l) = self.directions {
-            if !(3..=33_554_433).contains(&l) {
-                return Err(ParamsError::Directions(l));
-            }
+        if let Some(l) = self.directions
+            && !(3..=33_554_433).contains(&l)
+        {
+            return Err(ParamsError::Directions(l));
         }
-        if let Some(n) = self.tiles {
-            if !(1..=65536).contains(&n) {
-                return Err(ParamsError::Tiles(n));
-            }
+        if let Some(n) = self.tiles
+            && !(1..=65536).contains(&n)
+        {
+            return Err(ParamsError::Tiles(n));
         }
         if self.depth.leaf_size == 0 {
             return Err(ParamsError::LeafSize);
@@ -313,21 +313,23 @@ pub fn choose<M: Measure>(scene: &M, config: &BakeConfig) -> Result<Choice, M::E
     // DENSE_TILES when that fits the budget too (docs/benchmarks/parameters.md): on the
     // directions the ladder reached or, if that is too large, on fewer, down to
     // DENSE_MIN_LATTICE: finer tiles matter more to dense scenes than the last rungs of directions.
-    if let (None, None, Some((p, _, load))) = (explicit_n, config.tiles, chosen) {
-        if load > DENSE_TILE_LOAD && p.tiles < DENSE_TILES {
-            let reached = rungs.iter().rev().filter(|&&(ln, t)| {
-                t == p.tiles && (ln == p.lattice_n || (DENSE_MIN_LATTICE..p.lattice_n).contains(&ln))
-            });
-            for &(lattice_n, _) in reached {
-                if lower_bound_bytes(tris, lattice_n, DENSE_TILES) > auto_budget {
-                    continue;
-                }
-                let finer = params_for(scene.radius(), lattice_n, DENSE_TILES, config.depth);
-                let (bytes, load) = estimate(scene, &finer)?;
-                if bytes <= auto_budget {
-                    chosen = Some((finer, bytes, load));
-                    break;
-                }
+    if let (None, None, Some((p, _, load))) = (explicit_n, config.tiles, chosen)
+        && load > DENSE_TILE_LOAD
+        && p.tiles < DENSE_TILES
+    {
+        let reached = rungs
+            .iter()
+            .rev()
+            .filter(|&&(ln, t)| t == p.tiles && (ln == p.lattice_n || (DENSE_MIN_LATTICE..p.lattice_n).contains(&ln)));
+        for &(lattice_n, _) in reached {
+            if lower_bound_bytes(tris, lattice_n, DENSE_TILES) > auto_budget {
+                continue;
+            }
+            let finer = params_for(scene.radius(), lattice_n, DENSE_TILES, config.depth);
+            let (bytes, load) = estimate(scene, &finer)?;
+            if bytes <= auto_budget {
+                chosen = Some((finer, bytes, load));
+                break;
             }
         }
     }

@@ -555,7 +555,7 @@ fn import_primitive(
     let vertex = |k: usize| positions[indices.as_ref().map_or(k, |ix| ix[k] as usize)];
     let triangles = match mode {
         Mode::Triangles => {
-            if n % 3 != 0 {
+            if !n.is_multiple_of(3) {
                 ctx.warn(
                     builder,
                     format!("{location}: {n} vertices is not a multiple of 3; the last {} are ignored", n % 3),
