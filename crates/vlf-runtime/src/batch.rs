@@ -8,9 +8,8 @@
 //! and comes back to the first when its data has had time to arrive (asynchronous memory access
 //! chaining: Kocberber et al., "Asynchronous Memory Access Chaining", VLDB 2015). Each ray sees
 //! the same leaves in the same order and runs the same leaf tests as a single closest-hit query,
-//! so a batch gives the same answers, bit for bit, in the rays' order. (An interleaved any-hit ray
-//! searches the leaf it starts in first, where the single query searches it last: the answer,
-//! whether anything is hit, is the same.)
+//! so a batch gives the same answers, bit for bit, in the rays' order. An any-hit ray, as in the
+//! single query, searches the leaf it starts in last.
 
 use crate::filter::Passing;
 use crate::prefetch::prefetch;
@@ -30,9 +29,13 @@ const CACHED_BYTES: usize = 8 << 20;
 /// Rays a batch judges at a time: traced in turn if they are coherent, else interleaved.
 const WINDOW: usize = 256;
 
-/// The squared cosine of the angle between two directions above which they count as nearly the
-/// same (about 1.8°).
-const COHERENT_COS2: f32 = 0.999;
+/// Neighbouring rays that start within this many tile widths of each other count as coherent,
+/// whatever their directions. Measured (`docs/benchmarks/where-the-time-goes.md`): rays leaving
+/// neighbouring pixels' hits in random directions (ambient occlusion, diffuse bounces) ran up to
+/// 1.8× slower interleaved than in turn; shadow rays from every eighth pixel, whose origins lie
+/// two tiles apart on a 128² grid, 1.4× slower; rays from origins spread over the scene,
+/// 1.2–1.5× faster.
+const NEAR_TILES: f64 = 4.0;
 
 /// Whether a batch query interleaves its rays.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -55,6 +58,10 @@ struct Lane<'a, S> {
     tri_ray: TriRay,
     state: S,
     pending: Pending<'a>,
+    /// For an any-hit search: whether the ray has reached no leaf yet, and the leaf it starts in,
+    /// put off until its walk ends (as the single-ray query does: `crate::trace`'s `OriginLeaf`).
+    undecided: bool,
+    deferred: Option<Leaf<'a>>,
 }
 
 /// What a lane will do on its next turn, besides stepping its walk.
@@ -101,6 +108,7 @@ impl<'a> FieldView<'a> {
             }
             self.interleaved(
                 window,
+                false,
                 |ray| Closest::new(ray.tmax),
                 |best, leaf| closest_refs(leaf, best, &[]),
                 |tri_ray, _, best, refs, exit_t| closest_in_refs(tri_ray, &tris, refs, exit_t, best, &mut ()),
@@ -134,6 +142,7 @@ impl<'a> FieldView<'a> {
             }
             self.interleaved(
                 rays,
+                true,
                 |_| None,
                 |_, leaf| leaf.passing(leaf.exit_t, &[]),
                 |tri_ray, _, found, refs, _| {
@@ -153,26 +162,9 @@ impl<'a> FieldView<'a> {
             Interleave::Never => false,
             Interleave::Auto => {
                 let bytes = std::mem::size_of_val(self.reader.leaves) + std::mem::size_of_val(self.reader.triangles);
-                bytes > CACHED_BYTES && !self.coherent(rays)
+                bytes > CACHED_BYTES && !coherent(rays, self.grid.tile_width)
             }
         }
-    }
-
-    /// Whether most neighbours in `rays` start within a tile of each other in nearly the same
-    /// direction. Such rays read mostly the same tiles, which the first of them brings into the
-    /// cache; traced one after the other they wait on little, and interleaving them would only
-    /// add its bookkeeping.
-    fn coherent(&self, rays: &[Ray]) -> bool {
-        let reach = self.grid.tile_width * self.grid.tile_width;
-        let dot = |p: [f32; 3], q: [f32; 3]| p[0] * q[0] + p[1] * q[1] + p[2] * q[2];
-        let near = |a: &Ray, b: &Ray| {
-            let (o, d) = (a.org.map(|v| v as f64), b.org.map(|v| v as f64));
-            let apart = (0..3).map(|k| (o[k] - d[k]) * (o[k] - d[k])).sum::<f64>();
-            let cos = dot(a.dir, b.dir);
-            cos > 0.0 && cos * cos >= COHERENT_COS2 * dot(a.dir, a.dir) * dot(b.dir, b.dir) && apart < reach
-        };
-        let close = rays.windows(2).filter(|w| near(&w[0], &w[1])).count();
-        2 * close >= rays.len()
     }
 
     /// Starts loading the triangles of the refs `passing`.
@@ -189,11 +181,13 @@ impl<'a> FieldView<'a> {
     /// state; for each leaf the ray reaches, `refs` chooses the refs to test (their triangles
     /// start loading), and on the lane's next turn `visit` tests them and says whether the ray's
     /// search is over; `finish(i, s)` receives the final state of ray `i` (`None` for a ray that misses
-    /// the scene or is invalid).
+    /// the scene or is invalid). With `defer_origin` (any hit), the leaf a ray starts in is
+    /// visited after the rest of its walk.
     #[inline(always)]
     fn interleaved<S>(
         &self,
         rays: &[Ray],
+        defer_origin: bool,
         start: impl Fn(&Ray) -> S,
         refs: impl Fn(&S, &Leaf<'a>) -> Passing<'a>,
         visit: impl Fn(&TriRay, &Ray, &mut S, Passing<'a>, f64) -> bool,
@@ -211,7 +205,16 @@ impl<'a> FieldView<'a> {
                     && let Some(walk) = Walk::new(&self.reader, &self.grid, &setup)
                 {
                     let tri_ray = TriRay::relative(ray, origin);
-                    return Some(Lane { index, setup, walk, tri_ray, state: start(ray), pending: Pending::Nothing });
+                    return Some(Lane {
+                        index,
+                        setup,
+                        walk,
+                        tri_ray,
+                        state: start(ray),
+                        pending: Pending::Nothing,
+                        undecided: defer_origin,
+                        deferred: None,
+                    });
                 }
                 finish(index, None);
             }
@@ -228,6 +231,16 @@ impl<'a> FieldView<'a> {
                 // The leaf this lane reached on its last turn has had time to load: choose its refs
                 // and ask for their triangles, to be tested on the next turn.
                 let mut done = match std::mem::replace(&mut lane.pending, Pending::Nothing) {
+                    Pending::Leaf(leaf) if lane.undecided => {
+                        // The first leaf with refs: put off if the ray starts in it.
+                        lane.undecided = false;
+                        if leaf.enter_t == lane.setup.t0 {
+                            lane.deferred = Some(leaf);
+                        } else {
+                            lane.pending = Pending::Leaf(leaf);
+                        }
+                        continue;
+                    }
                     Pending::Leaf(leaf) => {
                         let chosen = refs(&lane.state, &leaf);
                         if chosen.is_done() {
@@ -250,7 +263,13 @@ impl<'a> FieldView<'a> {
                             lane.pending = Pending::Leaf(leaf);
                         }
                         Step::Wait => {}
-                        Step::End => done = true,
+                        Step::End => match lane.deferred.take() {
+                            Some(leaf) => {
+                                leaf.prefetch();
+                                lane.pending = Pending::Leaf(leaf);
+                            }
+                            None => done = true,
+                        },
                     }
                 }
                 if done {
@@ -263,5 +282,65 @@ impl<'a> FieldView<'a> {
                 }
             }
         }
+    }
+}
+
+/// Whether most neighbours in `rays` start within [`NEAR_TILES`] tiles (of width `tile_width`) of
+/// each other. Such rays read mostly the same tiles, or tiles of other directions around the same
+/// place, which the rays before them brought into the cache; traced one after the other they wait
+/// on little, and interleaving them would only add its bookkeeping. (Directions do not matter:
+/// rays from one place in random directions still ran faster in turn.)
+fn coherent(rays: &[Ray], tile_width: f64) -> bool {
+    let reach = NEAR_TILES * tile_width;
+    let near = |a: &Ray, b: &Ray| {
+        let apart = (0..3).map(|k| (a.org[k] as f64 - b.org[k] as f64).powi(2)).sum::<f64>();
+        apart < reach * reach
+    };
+    let close = rays.windows(2).filter(|w| near(&w[0], &w[1])).count();
+    2 * close >= rays.len()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A deterministic sequence of numbers in `[0, 1)` (xorshift).
+    fn uniform(seed: u64) -> impl FnMut() -> f32 {
+        let mut s = seed | 1;
+        move || {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            (s >> 40) as f32 / (1u64 << 24) as f32
+        }
+    }
+
+    #[test]
+    fn rays_starting_near_each_other_are_coherent_whatever_their_directions() {
+        let mut next = uniform(5);
+        let w = 0.01f32;
+        let up = [0.0, 0.0, 1.0];
+        // A camera's rays: one origin, many directions.
+        let camera: Vec<Ray> =
+            (0..WINDOW).map(|_| Ray::new([1.0, 2.0, 3.0], [next() - 0.5, next() - 0.5, next() - 0.5])).collect();
+        assert!(coherent(&camera, w as f64));
+        // Bounce rays from hits two tiles apart, in random directions.
+        let bounces: Vec<Ray> = (0..WINDOW)
+            .map(|i| Ray::new([2.0 * w * i as f32, 0.0, 0.0], [next() - 0.5, next() - 0.5, next() - 0.5]))
+            .collect();
+        assert!(coherent(&bounces, w as f64));
+        // Neighbours five tiles apart (beyond NEAR_TILES), all in one direction.
+        let apart: Vec<Ray> = (0..WINDOW).map(|i| Ray::new([5.0 * w * i as f32, 0.0, 0.0], up)).collect();
+        assert!(!coherent(&apart, w as f64));
+        // Origins spread over a scene a hundred tiles across.
+        let spread: Vec<Ray> = (0..WINDOW).map(|_| Ray::new([100.0 * w * next(), next(), next()], up)).collect();
+        assert!(!coherent(&spread, w as f64));
+        // Pairs of rays from one place, the pairs far apart: half the neighbours are near.
+        let pairs: Vec<Ray> = (0..WINDOW).map(|i| Ray::new([10.0 * w * (i / 2) as f32, 0.0, 0.0], up)).collect();
+        assert!(coherent(&pairs, w as f64));
+        // Every other ray far away: no two neighbours near.
+        let alternate: Vec<Ray> =
+            (0..WINDOW).map(|i| Ray::new([if i % 2 == 0 { 0.0 } else { 10.0 * w * i as f32 }, 0.0, 0.0], up)).collect();
+        assert!(!coherent(&alternate, w as f64));
     }
 }
