@@ -8,13 +8,14 @@
 # parameters, and writes next to it: SCENE-outside-all.bin and SCENE-inside-all.bin (512² primary
 # views, `vlf-bake rays`) and their middle 64 rows (SCENE-outside.bin, SCENE-inside.bin); 20,000
 # incoherent rays (origins in the scene's box, random directions, seed 1); and shadow rays (any
-# hit) from every eighth inside hit towards the peers' light, `centre + (0.3, 3, 0.2)·R`. For the
+# hit) from every eighth inside hit towards the peers' light, `centre + (0.3, 3, 0.2)·R`; and
+# ambient-occlusion (`-ao-shadow`) and bounce rays from every fourth inside hit. For the
 # random scenes of the peers benchmark, make the mesh first, e.g.
 # `vlf-bake gen random --count 100000 --size 0.0232 --seed 1 -o target/single-ray/r100kd.obj`.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 exec < <(:)
-[ $# -ge 1 ] || { sed -n 2,13p "$0" >&2; exit 2; }
+[ $# -ge 1 ] || { sed -n 2,14p "$0" >&2; exit 2; }
 s=$1
 W=target/single-ray
 mkdir -p "$W"
@@ -63,4 +64,25 @@ for i in range(0, len(rays) // 32, 8):
     p = [struct.unpack("<f", struct.pack("<f", v))[0] for v in p]
     out.append(struct.pack("<8f", *p, 1e-4, *[light[k] - p[k] for k in range(3)], 1.0 - 1e-4))
 open(f"{w}/{s}-shadow.bin", "wb").write(b"".join(out))
+# Rays leaving every fourth inside hit in a random direction on the camera's side (seed 3):
+# ambient occlusion (any hit within 0.3 R) and bounces (closest hit, unbounded), what
+# `examples/batch_choice.rs` times through the batch queries.
+rng = random.Random(3)
+ao, bounce = [], []
+for i in range(0, len(rays) // 32, 4):
+    ray = struct.unpack_from("<8f", rays, 32 * i)
+    t = struct.unpack_from("<f", hits, 16 * i)[0]
+    if math.isinf(t):
+        continue
+    p = [ray[k] + t * ray[4 + k] for k in range(3)]
+    z = rng.uniform(-1.0, 1.0)
+    a = rng.uniform(0.0, 2.0 * math.pi)
+    q = math.sqrt(1.0 - z * z)
+    d = [q * math.cos(a), q * math.sin(a), z]
+    if sum(d[k] * ray[4 + k] for k in range(3)) > 0:
+        d = [-v for v in d]
+    ao.append(struct.pack("<8f", *p, 1e-4 * r, *d, 0.3 * r))
+    bounce.append(struct.pack("<8f", *p, 1e-4 * r, *d, float("inf")))
+open(f"{w}/{s}-ao-shadow.bin", "wb").write(b"".join(ao))
+open(f"{w}/{s}-bounce.bin", "wb").write(b"".join(bounce))
 PY
