@@ -664,8 +664,8 @@ VlfStatus vlf_any_hit_local(const struct VlfField *field, const struct VlfRay *r
 
 /**
  * Traces `n` rays: `hits[i]` receives the closest hit of `rays[i]` (the miss record if none), as
- * `vlf_closest_hit` would, bit for bit. Incoherent rays are traced several at a time, interleaved
- * so that their cache misses overlap (`Field::closest_hits`). Runs on the calling thread; to use several cores, call it from several
+ * `vlf_closest_hit` would, bit for bit. Rays whose neighbours start far from them are traced
+ * several at a time, interleaved so that their cache misses overlap (`Field::closest_hits`). Runs on the calling thread; to use several cores, call it from several
  * threads on disjoint parts of the arrays.
  *
  * `rays` and `hits` may be NULL when `n` is 0, and must not overlap.

@@ -385,8 +385,8 @@ pub unsafe extern "C" fn vlf_any_hit_local(field: *const VlfField, ray: *const V
 }
 
 /// Traces `n` rays: `hits[i]` receives the closest hit of `rays[i]` (the miss record if none), as
-/// `vlf_closest_hit` would, bit for bit. Incoherent rays are traced several at a time, interleaved
-/// so that their cache misses overlap (`Field::closest_hits`). Runs on the calling thread; to use several cores, call it from several
+/// `vlf_closest_hit` would, bit for bit. Rays whose neighbours start far from them are traced
+/// several at a time, interleaved so that their cache misses overlap (`Field::closest_hits`). Runs on the calling thread; to use several cores, call it from several
 /// threads on disjoint parts of the arrays.
 ///
 /// `rays` and `hits` may be NULL when `n` is 0, and must not overlap.
@@ -412,7 +412,7 @@ pub unsafe extern "C" fn vlf_closest_hits(
         check_disjoint(span(rays, n), span(hits, n), "arrays `rays` and `hits`")?;
         // SAFETY: the caller's promises on the arrays; they do not overlap (checked).
         let (rays, hits) = unsafe { (slice_arg(rays, n, "rays")?, slice_out(hits, n, "hits")?) };
-        // Through the batch query (incoherent rays interleaved), a stack buffer at a time.
+        // Through the batch query (rays that start far apart interleaved), a stack buffer at a time.
         let mut buffer = [Hit::MISS; ARRAY_CHUNK];
         for (rays, hits) in rays.chunks(ARRAY_CHUNK).zip(hits.chunks_mut(ARRAY_CHUNK)) {
             let buffer = &mut buffer[..rays.len()];

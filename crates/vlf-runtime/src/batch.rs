@@ -75,9 +75,10 @@ enum Pending<'a> {
 
 impl<'a> FieldView<'a> {
     /// The closest hits of `rays` (world coordinates): `out[i]` is
-    /// [`FieldView::closest_hit`]`(&rays[i])`, the same hit bit for bit. Incoherent rays on a
-    /// field larger than the cache are traced several at once, interleaved, so that their cache
-    /// misses overlap ([`Interleave::Auto`]); allocates nothing.
+    /// [`FieldView::closest_hit`]`(&rays[i])`, the same hit bit for bit. On a field larger than
+    /// the cache, rays whose neighbours start far from them are traced several at once,
+    /// interleaved, so that their cache misses overlap ([`Interleave::Auto`]); rays that start
+    /// near each other, in any directions, one after the other. Allocates nothing.
     ///
     /// # Panics
     /// If the slices differ in length.

@@ -397,8 +397,8 @@ impl Field {
 
     /// Closest hits of a batch on the calling thread: `out[i]` is the hit record of `rays[i]`
     /// ([`Hit::MISS`] on a miss), the same as [`Field::closest_hit`] gives, bit for bit.
-    /// Incoherent rays are traced several at a time, interleaved so that their cache misses
-    /// overlap ([`FieldView::closest_hits`]). Allocates nothing.
+    /// Rays whose neighbours start far from them are traced several at a time, interleaved so
+    /// that their cache misses overlap ([`FieldView::closest_hits`]). Allocates nothing.
     ///
     /// # Panics
     /// If the slices differ in length.
