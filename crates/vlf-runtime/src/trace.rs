@@ -166,7 +166,7 @@ pub(crate) fn trace<'t, C: Counter, S: Search<'t>>(
     let margin = g.margin * cpu;
     let (dcx, dcy) = (s.d[0] * cpu, s.d[1] * cpu);
     let tris = search.tris();
-    let mut origin = OriginLeaf { undecided: S::DEFER_ORIGIN, deferred: None };
+    let mut origin: Option<OriginLeaf<'_>> = None;
     let over = 'walk: {
         while visits > 0 {
             visits -= 1;
@@ -209,7 +209,7 @@ pub(crate) fn trace<'t, C: Counter, S: Search<'t>>(
         }
         false
     };
-    if !over && let Some(d) = origin.deferred {
+    if !over && let Some(d) = origin {
         visit_leaf(&d.block, d.at, d.c, d.limits, tris, search, counter);
     }
 }
@@ -222,16 +222,12 @@ pub(crate) fn trace<'t, C: Counter, S: Search<'t>>(
 /// shadow rays this leaf took 11.4 of a ray's 25.8 triangle tests, and the occluder lay in a later
 /// leaf. An any-hit search may return any hit, so searching this leaf after the rest of the ray
 /// changes which hit is found, never whether one is: it is tested only if nothing else is hit.
+///
+/// It is the first leaf with refs whose part of the ray begins at the ray's start `t0`: the parts
+/// only move forward, so no later leaf begins there unless every leaf before it, this one among
+/// them, is empty in `t`.
 struct OriginLeaf<'r> {
-    /// No leaf with refs visited yet (and the search defers one).
-    undecided: bool,
-    /// The leaf put off: its refs start at byte `at` of `block`, `c` of them, and the ray's box over
-    /// it is `limits`.
-    deferred: Option<Deferred<'r>>,
-}
-
-/// A leaf whose search waits until the rest of the ray is searched.
-struct Deferred<'r> {
+    /// Its refs start at byte `at` of `block`, `c` of them; the ray's box over it is `limits`.
     block: Block<'r>,
     at: usize,
     c: usize,
@@ -269,7 +265,7 @@ fn visit_tile<'t, 'r, C: Counter, S: Search<'t>>(
     tris: &'t S::Tris,
     search: &mut S,
     counter: &mut C,
-    origin: &mut OriginLeaf<'r>,
+    origin: &mut Option<OriginLeaf<'r>>,
 ) -> bool {
     let bounds = block.bounds();
     let ends = block.ends();
@@ -309,13 +305,9 @@ fn visit_tile<'t, 'r, C: Counter, S: Search<'t>>(
         let end = ends[leaf] as usize;
         if start < end && end <= m {
             let limits = ray.limits(enter, lower(exit, search.limit()));
-            // The first leaf with refs, if the ray starts in it, is put off (`OriginLeaf`).
-            let defer = S::DEFER_ORIGIN && origin.undecided && enter == s.t0;
-            if S::DEFER_ORIGIN {
-                origin.undecided = false;
-            }
-            if defer {
-                origin.deferred = Some(Deferred { block: *block, at: hdr + 8 * start, c: end - start, limits });
+            // The leaf the ray starts in is put off (`OriginLeaf`).
+            if S::DEFER_ORIGIN && origin.is_none() && enter == s.t0 {
+                *origin = Some(OriginLeaf { block: *block, at: hdr + 8 * start, c: end - start, limits });
             } else if visit_leaf(block, hdr + 8 * start, end - start, limits, tris, search, counter)
                 || search.done(exit)
             {
