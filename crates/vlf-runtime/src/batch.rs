@@ -305,15 +305,10 @@ fn coherent(rays: &[Ray], tile_width: f64) -> bool {
 mod tests {
     use super::*;
 
-    /// A deterministic sequence of numbers in `[0, 1)` (xorshift).
+    /// A deterministic sequence of numbers in `[0, 1)`.
     fn uniform(seed: u64) -> impl FnMut() -> f32 {
-        let mut s = seed | 1;
-        move || {
-            s ^= s << 13;
-            s ^= s >> 7;
-            s ^= s << 17;
-            (s >> 40) as f32 / (1u64 << 24) as f32
-        }
+        let mut bits = crate::test_rng::xorshift(seed);
+        move || (bits() >> 40) as f32 / (1u64 << 24) as f32
     }
 
     #[test]

@@ -241,22 +241,12 @@ impl Iterator for Passing<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::test_rng::xorshift;
     use vlf_format::block::{Block, Ref, write_block};
-
-    /// A small deterministic generator (xorshift), so the test needs no dependency.
-    fn rng(seed: u64) -> impl FnMut() -> u64 {
-        let mut s = seed | 1;
-        move || {
-            s ^= s << 13;
-            s ^= s >> 7;
-            s ^= s << 17;
-            s
-        }
-    }
 
     #[test]
     fn the_vector_mask_is_the_scalar_mask() {
-        let mut next = rng(7);
+        let mut next = xorshift(7);
         for _ in 0..100_000 {
             let lanes: [[u8; 16]; 4] = std::array::from_fn(|_| std::array::from_fn(|_| next() as u8));
             let l = next().to_le_bytes();
@@ -267,7 +257,7 @@ mod tests {
 
     #[test]
     fn the_vector_segment_limits_are_the_scalar_ones() {
-        let mut next = rng(13);
+        let mut next = xorshift(13);
         // Cells in and around a tile, some far outside, and the values a lying file can give.
         let specials = [f64::NAN, f64::INFINITY, f64::NEG_INFINITY, -0.0, 0.0, 255.0, 255.5, 256.0, -1e300, 1e300];
         let mut value = move || match next() % 8 {
@@ -287,7 +277,7 @@ mod tests {
 
     #[test]
     fn passing_refs_are_those_whose_boxes_meet_the_ray_box() {
-        let mut next = rng(11);
+        let mut next = xorshift(11);
         for round in 0..500 {
             // Leaves of up to three chunks of 64 refs, and partial groups of sixteen.
             let m = (next() % 150) as usize;

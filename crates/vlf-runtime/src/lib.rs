@@ -69,6 +69,8 @@ mod prefetch;
 mod query;
 mod scene;
 mod setup;
+#[cfg(test)]
+mod test_rng;
 mod trace;
 mod walk;
 

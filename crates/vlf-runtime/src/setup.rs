@@ -271,13 +271,8 @@ mod tests {
     /// the oracle suites check the answers.)
     #[test]
     fn the_fine_table_gives_a_lattice_point_about_as_near_as_the_nearest() {
-        let mut s = 0x2545_f491_4f6c_dd1du64;
-        let mut next = move || {
-            s ^= s << 13;
-            s ^= s >> 7;
-            s ^= s << 17;
-            (s >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut bits = crate::test_rng::xorshift(0x2545_f491_4f6c_dd1d);
+        let mut next = move || (bits() >> 11) as f64 / (1u64 << 53) as f64;
         for n in 1..=FINE_MAX_N {
             let nf = n as f64;
             let points: Vec<[usize; 2]> = (0..=n).flat_map(|a| (0..=n - a).map(move |b| [a, b])).collect();

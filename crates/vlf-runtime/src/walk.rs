@@ -579,13 +579,7 @@ mod tests {
     /// on, between, below and above them (and a NaN, which counts nothing).
     #[test]
     fn the_entry_leaf_is_the_partition_point() {
-        let mut s = 0x9e37_79b9_7f4a_7c15u64;
-        let mut next = move || {
-            s ^= s << 13;
-            s ^= s >> 7;
-            s ^= s << 17;
-            s
-        };
+        let mut next = crate::test_rng::xorshift(0x9e37_79b9_7f4a_7c15);
         for _ in 0..20_000 {
             let k = (next() % 40) as usize;
             let mut inner: Vec<u16> = (0..k).map(|_| next() as u16 % 200).collect();
