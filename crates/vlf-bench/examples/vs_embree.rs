@@ -32,10 +32,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let embree = EmbreeContestant::build(&tris).map_err(|e| e.to_string())?;
     for set in &args[2..] {
         let bytes = std::fs::read(set)?;
-        if bytes.is_empty() || bytes.len() % 32 != 0 {
-            return Err(format!("{set}: {} bytes, not a whole number of 32-byte rays", bytes.len()).into());
-        }
-        let rays: Vec<Ray> = bytemuck::pod_collect_to_vec(&bytes);
+        let rays = match Ray::from_records(&bytes) {
+            Some(rays) if !rays.is_empty() => rays,
+            _ => return Err(format!("{set}: {} bytes, not a whole number of 32-byte rays", bytes.len()).into()),
+        };
         let any = set.contains("shadow");
         let (mut field_ns, mut embree_ns) = (vec![], vec![]);
         let (mut field_hits, mut embree_hits) = (0, 0);

@@ -29,6 +29,13 @@ impl Ray {
         Ray { org, tmin, dir, tmax }
     }
 
+    /// The rays of a rays file's bytes (`formats/rays.md`: 32-byte little-endian records, this
+    /// struct's layout), or `None` if the bytes are not a whole number of records. Rays are not
+    /// checked: an invalid one misses.
+    pub fn from_records(bytes: &[u8]) -> Option<Vec<Ray>> {
+        bytes.len().is_multiple_of(size_of::<Ray>()).then(|| bytemuck::pod_collect_to_vec(bytes))
+    }
+
     /// Whether the ray can be traced: finite origin and direction, a nonzero direction, and an
     /// interval `tmin ≤ tmax` without NaN. Invalid rays miss.
     #[inline]
@@ -140,5 +147,22 @@ impl Counter for TraceStats {
     #[inline(always)]
     fn test(&mut self) {
         self.triangle_tests += 1;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rays_read_back_from_their_records_and_partial_records_are_refused() {
+        let rays =
+            [Ray::new([1.0, 2.0, 3.0], [0.0, 0.0, 1.0]), Ray::with_interval([0.5; 3], [1.0, 0.0, 0.0], 0.25, 4.0)];
+        let bytes: &[u8] = bytemuck::cast_slice(&rays);
+        assert_eq!(bytes.len(), 64);
+        assert_eq!(Ray::from_records(bytes), Some(rays.to_vec()));
+        assert_eq!(Ray::from_records(&[]), Some(vec![]));
+        assert_eq!(Ray::from_records(&bytes[..33]), None);
+        assert_eq!(Ray::from_records(&bytes[..31]), None);
     }
 }

@@ -28,10 +28,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut closest: Vec<Option<Hit>> = vec![None; 1024];
     for set in &args[1..] {
         let bytes = std::fs::read(set)?;
-        if bytes.is_empty() || bytes.len() % 32 != 0 {
-            return Err(format!("{set}: {} bytes, not a whole number of 32-byte rays", bytes.len()).into());
-        }
-        let rays: Vec<Ray> = bytemuck::pod_collect_to_vec(&bytes);
+        let rays = match Ray::from_records(&bytes) {
+            Some(rays) if !rays.is_empty() => rays,
+            _ => return Err(format!("{set}: {} bytes, not a whole number of 32-byte rays", bytes.len()).into()),
+        };
         let shadow = set.contains("shadow");
         let mut line = format!("{set:40} {:>7} rays", rays.len());
         for (name, how) in

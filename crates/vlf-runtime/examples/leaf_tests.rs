@@ -66,10 +66,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     let field = Field::open(field)?;
     let bytes = std::fs::read(rays)?;
-    if bytes.is_empty() || bytes.len() % 32 != 0 {
-        return Err(format!("{rays}: {} bytes, not a whole number of 32-byte rays", bytes.len()).into());
-    }
-    let rays: Vec<Ray> = bytemuck::pod_collect_to_vec(&bytes);
+    let rays = match Ray::from_records(&bytes) {
+        Some(rays) if !rays.is_empty() => rays,
+        _ => return Err(format!("{rays}: {} bytes, not a whole number of 32-byte rays", bytes.len()).into()),
+    };
     let view = field.view();
     let mut count = ByLeaf::default();
     let mut hits = 0;

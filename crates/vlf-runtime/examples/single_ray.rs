@@ -32,10 +32,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     let field = Field::open(&field)?;
     let bytes = std::fs::read(&rays)?;
-    if bytes.len() % 32 != 0 || bytes.is_empty() {
-        return Err(format!("{rays}: {} bytes, not a whole number of 32-byte rays", bytes.len()).into());
-    }
-    let rays: Vec<Ray> = bytemuck::pod_collect_to_vec(&bytes);
+    let rays = match Ray::from_records(&bytes) {
+        Some(rays) if !rays.is_empty() => rays,
+        _ => return Err(format!("{rays}: {} bytes, not a whole number of 32-byte rays", bytes.len()).into()),
+    };
     let count = count.unwrap_or(rays.len());
     if count == 0 || rounds == 0 {
         return Err("--count and --rounds must be at least 1".into());

@@ -13,14 +13,14 @@ use vlf_runtime::{Field, Hit, Ray};
 /// Reads a rays file (`formats/rays.md`): 32-byte records.
 fn read_rays(path: &Path) -> Result<Vec<Ray>> {
     let bytes = std::fs::read(path).with_context(|| format!("cannot read rays file {}", path.display()))?;
-    if bytes.len() % size_of::<Ray>() != 0 {
-        bail!(
+    match Ray::from_records(&bytes) {
+        Some(rays) => Ok(rays),
+        None => bail!(
             "rays file {} is {} bytes, not a multiple of the 32-byte ray record (formats/rays.md)",
             path.display(),
             bytes.len()
-        );
+        ),
     }
-    Ok(bytemuck::pod_collect_to_vec(&bytes))
 }
 
 /// The hits of `rays` in `field`, and the seconds spent tracing.
