@@ -54,14 +54,20 @@ open(f"{w}/{s}-incoherent.bin", "wb").write(b"".join(out))
 light = [c[0] + 0.3 * r, c[1] + 3.0 * r, c[2] + 0.2 * r]
 rays = open(f"{w}/{s}-inside-all.bin", "rb").read()
 hits = open(f"{w}/{s}-inside-hits.bin", "rb").read()
+
+
+def inside_hits(step):
+    """Every `step`-th ray of the inside view that hits: the ray, and its hit point in f32."""
+    for i in range(0, len(rays) // 32, step):
+        ray = struct.unpack_from("<8f", rays, 32 * i)
+        t = struct.unpack_from("<f", hits, 16 * i)[0]
+        if not math.isinf(t):
+            p = [ray[k] + t * ray[4 + k] for k in range(3)]
+            yield ray, [struct.unpack("<f", struct.pack("<f", v))[0] for v in p]
+
+
 out = []
-for i in range(0, len(rays) // 32, 8):
-    ray = struct.unpack_from("<8f", rays, 32 * i)
-    t = struct.unpack_from("<f", hits, 16 * i)[0]
-    if math.isinf(t):
-        continue
-    p = [ray[k] + t * ray[4 + k] for k in range(3)]
-    p = [struct.unpack("<f", struct.pack("<f", v))[0] for v in p]
+for ray, p in inside_hits(8):
     out.append(struct.pack("<8f", *p, 1e-4, *[light[k] - p[k] for k in range(3)], 1.0 - 1e-4))
 open(f"{w}/{s}-shadow.bin", "wb").write(b"".join(out))
 # Rays leaving every fourth inside hit in a random direction on the camera's side (seed 3):
@@ -69,12 +75,7 @@ open(f"{w}/{s}-shadow.bin", "wb").write(b"".join(out))
 # `examples/batch_choice.rs` times through the batch queries.
 rng = random.Random(3)
 ao, bounce = [], []
-for i in range(0, len(rays) // 32, 4):
-    ray = struct.unpack_from("<8f", rays, 32 * i)
-    t = struct.unpack_from("<f", hits, 16 * i)[0]
-    if math.isinf(t):
-        continue
-    p = [ray[k] + t * ray[4 + k] for k in range(3)]
+for ray, p in inside_hits(4):
     z = rng.uniform(-1.0, 1.0)
     a = rng.uniform(0.0, 2.0 * math.pi)
     q = math.sqrt(1.0 - z * z)
