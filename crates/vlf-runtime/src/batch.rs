@@ -231,17 +231,18 @@ impl<'a> FieldView<'a> {
                 let Some(lane) = slot else { continue };
                 // The leaf this lane reached on its last turn has had time to load: choose its refs
                 // and ask for their triangles, to be tested on the next turn.
-                let mut done = match std::mem::replace(&mut lane.pending, Pending::Nothing) {
-                    Pending::Leaf(leaf) if lane.undecided => {
-                        // The first leaf with refs: put off if the ray starts in it.
-                        lane.undecided = false;
-                        if leaf.enter_t == lane.setup.t0 {
-                            lane.deferred = Some(leaf);
-                        } else {
-                            lane.pending = Pending::Leaf(leaf);
-                        }
-                        continue;
+                // The first leaf with refs: put off if the ray starts in it (the walk then steps
+                // on at once).
+                if lane.undecided
+                    && let Pending::Leaf(leaf) = lane.pending
+                {
+                    lane.undecided = false;
+                    if leaf.enter_t == lane.setup.t0 {
+                        lane.deferred = Some(leaf);
+                        lane.pending = Pending::Nothing;
                     }
+                }
+                let mut done = match std::mem::replace(&mut lane.pending, Pending::Nothing) {
                     Pending::Leaf(leaf) => {
                         let chosen = refs(&lane.state, &leaf);
                         if chosen.is_done() {
