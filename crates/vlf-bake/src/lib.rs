@@ -28,6 +28,7 @@ pub mod generate;
 pub mod import;
 pub mod inspect;
 pub mod job;
+pub mod order;
 pub mod pack;
 pub mod params;
 pub mod prepare;

@@ -1,5 +1,6 @@
-//! The canonical scene a bake consumes: triangles in import order, relative to the scene's
-//! centre, with provenance.
+//! The canonical scene a bake consumes: triangles in Morton order of their centroids (so that
+//! triangles close in space are close in the file), relative to the scene's centre, with
+//! provenance.
 //!
 //! Importers feed a [`SceneBuilder`] world-space triangles in f64; it validates every vertex
 //! (finite, not huge), drops zero-area triangles with a count, and records where each kept
@@ -8,7 +9,8 @@
 //! becomes the origin of the stored f32 triangles (`formats/vlf.md` §5.7), so a scene far from the
 //! world's origin keeps the precision of its own size. A triangle that collapses to zero area in
 //! f32 even so is dropped and counted as a loss of precision, and a triangle with the same
-//! vertices as an earlier one is merged into it and counted. The bytes of the resulting [`Scene`]
+//! vertices as an earlier one is merged into it and counted; the rest are put in Morton order
+//! ([`crate::order`]). The bytes of the resulting [`Scene`]
 //! are what the SCENE's counts, TRIANGLES, PROVENANCE, SOURCES, INPUTS, STRINGS, MATERIALS,
 //! CAMERAS and LIGHTS sections hold, and what the input hash covers.
 
@@ -180,6 +182,21 @@ impl Scene {
 
     pub fn len(&self) -> usize {
         self.triangles.len()
+    }
+
+    /// Reorders the triangles, with their provenance, along the Morton curve through their
+    /// centroids ([`crate::order`]), and renames the kept triangle of every duplicate to match.
+    fn put_in_morton_order(&mut self) {
+        let order = crate::order::morton_order(&self.vertices());
+        let mut new_id = vec![0u32; order.len()];
+        for (k, &old) in order.iter().enumerate() {
+            new_id[old as usize] = k as u32;
+        }
+        self.triangles = order.iter().map(|&old| self.triangles[old as usize]).collect();
+        self.provenance = order.iter().map(|&old| self.provenance[old as usize]).collect();
+        for d in &mut self.duplicates {
+            d.triangle = new_id[d.triangle as usize];
+        }
     }
 
     pub fn is_empty(&self) -> bool {
@@ -364,8 +381,6 @@ impl SceneBuilder {
                 count(report.dropped_duplicates, "triangle has", "triangles have")
             ));
         }
-        // Sorted by the kept triangle (stable: import order among the duplicates of one).
-        self.scene.duplicates.sort_by_key(|d| d.triangle);
         if self.scene.triangles.is_empty() {
             let what = match self.paths.as_slice() {
                 [one] => one.display().to_string(),
@@ -381,6 +396,9 @@ impl SceneBuilder {
             };
             return Err(ImportError::NoTriangles { what, detail });
         }
+        self.scene.put_in_morton_order();
+        // Sorted by the kept triangle (stable: import order among the duplicates of one).
+        self.scene.duplicates.sort_by_key(|d| d.triangle);
         Ok(self.scene)
     }
 

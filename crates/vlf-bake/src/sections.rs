@@ -26,7 +26,7 @@ use vlf_geom::frame::frame;
 /// (`formats/vlf.md` §6.3): fewer, longer leaves. Revision 7 refines the automatic parameters'
 /// tiles to 128² only above 750 triangles per non-empty 64² tile, not 400
 /// (`crate::params::DENSE_TILE_LOAD`).
-pub const BAKER_REVISION: u32 = 7;
+pub const BAKER_REVISION: u32 = 8;
 
 /// The input hash of `formats/vlf.md` §3.2.
 pub fn input_hash(scene: &Scene, request: &Request) -> [u8; 32] {

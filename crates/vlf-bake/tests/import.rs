@@ -12,8 +12,29 @@ fn fixture(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/meshes").join(name)
 }
 
+/// The scene of `name`, its triangles put back in import order (the tests below check the
+/// importers face by face; `morton_order_is_a_permutation_of_import_order` checks the order).
 fn import(name: &str) -> Scene {
-    import_paths(&[fixture(name)]).unwrap_or_else(|e| panic!("{name}: {e}"))
+    in_import_order(import_paths(&[fixture(name)]).unwrap_or_else(|e| panic!("{name}: {e}")))
+}
+
+/// `scene` with its triangles (and their provenance) sorted by source, then index within it:
+/// the order the importers produced them in, before the builder put them in Morton order. The
+/// kept triangle of every duplicate is renamed to match.
+fn in_import_order(mut scene: Scene) -> Scene {
+    let mut order: Vec<u32> = (0..scene.len() as u32).collect();
+    order.sort_by_key(|&k| (scene.provenance[k as usize].source, scene.provenance[k as usize].index));
+    let mut new_id = vec![0u32; order.len()];
+    for (k, &old) in order.iter().enumerate() {
+        new_id[old as usize] = k as u32;
+    }
+    scene.triangles = order.iter().map(|&old| scene.triangles[old as usize]).collect();
+    scene.provenance = order.iter().map(|&old| scene.provenance[old as usize]).collect();
+    for d in &mut scene.duplicates {
+        d.triangle = new_id[d.triangle as usize];
+    }
+    scene.duplicates.sort_by_key(|d| d.triangle);
+    scene
 }
 
 fn import_err(name: &str) -> ImportError {
@@ -342,7 +363,7 @@ fn gltf_node_hierarchy_and_external_buffer() {
 
 #[test]
 fn two_inputs_in_one_scene() {
-    let scene = import_paths(&[fixture("small/groups.obj"), fixture("Box.gltf")]).unwrap();
+    let scene = in_import_order(import_paths(&[fixture("small/groups.obj"), fixture("Box.gltf")]).unwrap());
     assert_eq!(scene.len(), 22);
     assert_eq!(scene.inputs.len(), 2);
     assert_eq!((input_name(&scene, 0), input_name(&scene, 1)), ("groups.obj", "Box.gltf"));
@@ -361,9 +382,36 @@ fn two_inputs_in_one_scene() {
     let mut builder = SceneBuilder::new();
     import_path(&mut builder, &fixture("Box.gltf")).unwrap();
     import_path(&mut builder, &fixture("bunny.obj")).unwrap();
-    let scene = builder.finish().unwrap();
+    let scene = in_import_order(builder.finish().unwrap());
     assert_eq!(scene.len(), 12 + 3674);
     assert_eq!((input_name(&scene, 0), input_name(&scene, 1)), ("Box.gltf", "bunny.obj"));
+}
+
+#[test]
+fn morton_order_is_a_permutation_of_import_order() {
+    // Two inputs, so that the order mixes sources; the bunny has no duplicates, the groups none.
+    let scene = import_paths(&[fixture("bunny.obj"), fixture("small/groups.obj")]).unwrap();
+    let imported = in_import_order(scene.clone());
+    // Every (source, index) once: a permutation.
+    let mut seen: Vec<(u32, u32)> = scene.provenance.iter().map(|p| (p.source, p.index)).collect();
+    seen.sort_unstable();
+    seen.dedup();
+    assert_eq!(seen.len(), scene.len());
+    // The stored order is the Morton order of the import order, triangle for triangle.
+    let order = vlf_bake::order::morton_order(&imported.vertices());
+    let expected: Vec<[[f32; 3]; 3]> = order.iter().map(|&k| imported.triangles[k as usize].v).collect();
+    assert_eq!(scene.vertices(), expected);
+    assert_ne!(scene.vertices(), imported.vertices(), "the bunny's import order is not Morton order");
+    // Neighbours in the file are close in space: the mean distance between consecutive
+    // centroids falls well below import order's.
+    let mean_step = |s: &Scene| {
+        let c: Vec<[f64; 3]> =
+            s.vertices().iter().map(|t| std::array::from_fn(|i| (t[0][i] + t[1][i] + t[2][i]) as f64 / 3.0)).collect();
+        c.windows(2).map(|w| (0..3).map(|i| (w[1][i] - w[0][i]).powi(2)).sum::<f64>().sqrt()).sum::<f64>()
+            / (c.len() - 1) as f64
+    };
+    let (morton, import) = (mean_step(&scene), mean_step(&imported));
+    assert!(morton < 0.5 * import, "mean step between neighbours: Morton {morton}, import {import}");
 }
 
 #[test]

@@ -276,7 +276,7 @@ pub struct BeamRecord {
     pub ref_count: u64,
 }
 
-/// TRIANGLES (§5.7), 36 bytes: one triangle, in import order (its index is its id), its vertices
+/// TRIANGLES (§5.7), 36 bytes: one triangle (its index is its id; in Morton order since baker revision 8), its vertices
 /// relative to the scene's centre.
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
 #[repr(C)]
