@@ -25,7 +25,8 @@ use vlf_geom::frame::frame;
 /// raises the leaf heuristic's cost of visiting a leaf from 1.5 to 2.5 triangle tests
 /// (`formats/vlf.md` §6.3): fewer, longer leaves. Revision 7 refines the automatic parameters'
 /// tiles to 128² only above 750 triangles per non-empty 64² tile, not 400
-/// (`crate::params::DENSE_TILE_LOAD`).
+/// (`crate::params::DENSE_TILE_LOAD`). Revision 8 stores the triangles in Morton order of their
+/// centroids (`crate::order`, `formats/vlf.md` §5.7), so their ids change.
 pub const BAKER_REVISION: u32 = 8;
 
 /// The input hash of `formats/vlf.md` §3.2.
