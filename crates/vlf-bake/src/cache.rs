@@ -36,7 +36,7 @@ use std::io::{self, Seek};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, SystemTime};
 use vlf_format::shard::is_per_direction;
-use vlf_format::{FieldReader, Header, Request, SectionEntry, VERSION_MAJOR, VERSION_MINOR, hex};
+use vlf_format::{AlignedWriter, FieldReader, Header, Request, SectionEntry, VERSION_MAJOR, VERSION_MINOR, hex};
 use vlf_runtime::Field;
 
 /// The environment variable naming the cache directory when `--cache-dir` is absent.
@@ -234,7 +234,10 @@ impl Cache {
             }
         };
         let tmp = AtomicFile::create(output)?;
-        io::copy(&mut entry, &mut tmp.file())?;
+        // Whole 2 MiB writes, so that the field maps with huge pages (`vlf_format::writer`).
+        let mut w = AlignedWriter::new(tmp.file());
+        io::copy(&mut entry, &mut w)?;
+        w.finish()?;
         let checked = Field::open(tmp.temp_path()).map_err(|e| e.to_string()).and_then(|field| {
             let r = field.reader();
             let found = key_of_field(r.header, r.table);
@@ -280,7 +283,10 @@ impl Cache {
         let mut src = field.try_clone()?;
         src.rewind()?;
         let tmp = AtomicFile::create(&path)?;
-        io::copy(&mut src, &mut tmp.file())?;
+        // Whole 2 MiB writes, as a bake's own (`vlf_format::writer`).
+        let mut w = AlignedWriter::new(tmp.file());
+        io::copy(&mut src, &mut w)?;
+        w.finish()?;
         tmp.commit()
     }
 

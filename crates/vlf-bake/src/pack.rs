@@ -17,7 +17,7 @@ use std::io::{self, BufReader, BufWriter, Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 use vlf_format::pack::{self, StreamError};
-use vlf_format::{FormatError, SectionEntry, codec, hex, kind_name};
+use vlf_format::{AlignedWriter, FormatError, SectionEntry, codec, hex, kind_name};
 
 pub use vlf_format::pack::{DEFAULT_LEVEL, LEVELS};
 
@@ -273,7 +273,8 @@ pub fn unpack_path(input: &Path, output: &Path, progress: &dyn Progress) -> Resu
         let in_head = (vlf_format::HEADER_SIZE + vlf_format::TABLE_ENTRY_SIZE * table.len()) as u64;
         file.seek(SeekFrom::Start(in_head)).map_err(io_error(reading))?;
         let mut r = BufReader::with_capacity(1 << 20, file);
-        let mut w = BufWriter::with_capacity(1 << 20, out.file());
+        // Whole 2 MiB writes, so that the raw field maps with huge pages (`vlf_format::writer`).
+        let mut w = AlignedWriter::new(out.file());
         w.write_all(&head).map_err(io_error(writing))?;
         let (mut in_pos, mut out_pos) = (in_head, head.len() as u64);
         for (e, raw) in table.iter().zip(&raw_table) {

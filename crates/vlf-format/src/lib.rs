@@ -39,4 +39,4 @@ pub use layout::*;
 pub use reader::{FieldReader, check_header, check_table, content_hash, parse_head, read_header_and_table};
 pub use section::*;
 pub use verify::{VerifyReport, verify};
-pub use writer::{FieldFile, HashingWriter, SectionWriter};
+pub use writer::{AlignedWriter, FieldFile, HashingWriter, SectionWriter, WRITE_CHUNK};

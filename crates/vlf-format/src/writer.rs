@@ -8,14 +8,27 @@
 //! written; [`FieldFile::finish`] writes the table and the header with the content hash over both
 //! (§3.1), which is why sections may be written in any order.
 //!
+//! Every byte reaches the file in a write of a whole [`WRITE_CHUNK`] (2 MiB) aligned on the file,
+//! except at its end: sections written in pieces and at different places are gathered into their
+//! chunks first ([`Chunks`]). Where the file system caches files in large folios (Linux ext4 from
+//! 6.16, XFS), a file written this way sits in the page cache in huge-page-sized pieces, which a
+//! reader's memory map then maps with huge pages: a query touching a large field takes far fewer
+//! TLB misses (`docs/benchmarks/where-the-time-goes.md`). Elsewhere it is ordinary buffering.
+//!
 //! Atomic replacement of the output path is the caller's business (`vlf-bake` writes into a
 //! temporary file in the output directory, syncs it and renames it).
 
 use crate::layout::*;
 use crate::reader::content_hash;
 use crate::section::*;
+use std::collections::{BTreeMap, BTreeSet};
 use std::fs::File;
 use std::io::{self, Read, Write};
+use std::sync::{Arc, Mutex, MutexGuard};
+
+/// The size and alignment of the writes a [`FieldFile`] and an [`AlignedWriter`] make: 2 MiB, the
+/// huge page of x86-64 and of aarch64 with 4 KiB pages.
+pub const WRITE_CHUNK: usize = 2 << 20;
 
 /// Writes all of `buf` at `offset` without moving a shared cursor.
 fn write_all_at(file: &File, buf: &[u8], offset: u64) -> io::Result<()> {
@@ -38,9 +51,84 @@ fn write_all_at(file: &File, buf: &[u8], offset: u64) -> io::Result<()> {
     }
 }
 
+/// The chunks of a file being written at many places: each chunk's bytes are gathered in memory
+/// until all of it has been written, then written at once. Each byte of the file is written once
+/// (gaps between sections as zeros), so a chunk completes when its last byte arrives; what is
+/// still gathered when the file ends is written by [`Chunks::flush`]. At most one chunk per place
+/// being written (an open section, a gap) is held at a time. (Should a byte be written twice, its
+/// chunk may be written early; later writes to it then go straight to the file, so the file's
+/// bytes are right whatever the order.)
+struct Chunks {
+    file: File,
+    /// Chunk index to its bytes and how many of them were written.
+    gathering: BTreeMap<u64, (Box<[u8]>, usize)>,
+    /// The chunks already written to the file.
+    written: BTreeSet<u64>,
+}
+
+impl Chunks {
+    /// Writes `buf` at `offset`.
+    fn write_at(&mut self, mut buf: &[u8], mut offset: u64) -> io::Result<()> {
+        let chunk = WRITE_CHUNK as u64;
+        while !buf.is_empty() {
+            let (index, within) = (offset / chunk, (offset % chunk) as usize);
+            let n = buf.len().min(WRITE_CHUNK - within);
+            let (part, rest) = buf.split_at(n);
+            if n == WRITE_CHUNK || self.written.contains(&index) {
+                // A whole chunk at once (no copy; it replaces anything gathered for it), or a
+                // chunk already written.
+                self.gathering.remove(&index);
+                write_all_at(&self.file, part, offset)?;
+                self.written.insert(index);
+            } else {
+                let (bytes, filled) =
+                    self.gathering.entry(index).or_insert_with(|| (vec![0; WRITE_CHUNK].into_boxed_slice(), 0));
+                bytes[within..within + n].copy_from_slice(part);
+                *filled += n;
+                if *filled >= WRITE_CHUNK {
+                    let (bytes, _) = self.gathering.remove(&index).expect("the chunk being gathered");
+                    write_all_at(&self.file, &bytes, index * chunk)?;
+                    self.written.insert(index);
+                }
+            }
+            (buf, offset) = (rest, offset + n as u64);
+        }
+        Ok(())
+    }
+
+    /// Writes what is still gathered, up to the file's end `end`.
+    fn flush(&mut self, end: u64) -> io::Result<()> {
+        for (index, (bytes, _)) in std::mem::take(&mut self.gathering) {
+            let at = index * WRITE_CHUNK as u64;
+            let len = end.saturating_sub(at).min(WRITE_CHUNK as u64) as usize;
+            write_all_at(&self.file, &bytes[..len], at)?;
+            self.written.insert(index);
+        }
+        Ok(())
+    }
+}
+
+/// The chunks of one file, shared by the [`FieldFile`] and its [`SectionWriter`]s.
+#[derive(Clone)]
+struct SharedChunks(Arc<Mutex<Chunks>>);
+
+impl SharedChunks {
+    fn lock(&self) -> MutexGuard<'_, Chunks> {
+        // A writer that panicked mid-copy leaves a chunk with some bytes unwritten: the file is
+        // abandoned by its caller anyway (a bake writes a temporary file and renames it only once
+        // it is finished).
+        self.0.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
+    }
+
+    fn write_at(&self, buf: &[u8], offset: u64) -> io::Result<()> {
+        self.lock().write_at(buf, offset)
+    }
+}
+
 /// A field file being written. See the module documentation.
 pub struct FieldFile {
     file: File,
+    chunks: SharedChunks,
     magic: [u8; 8],
     table: Vec<SectionEntry>,
     /// Sections handed out as writers and not yet finished (their table index).
@@ -51,7 +139,7 @@ pub struct FieldFile {
 
 /// A section being written sequentially at its own offset. Buffered; hashes what it writes.
 pub struct SectionWriter {
-    file: File,
+    chunks: SharedChunks,
     index: usize,
     start: u64,
     /// `Some(n)` for a reserved section that must be exactly `n` bytes long.
@@ -81,7 +169,20 @@ impl FieldFile {
         }
         file.set_len(0)?;
         let end = (HEADER_SIZE + TABLE_ENTRY_SIZE * sections) as u64;
-        Ok(FieldFile { file, magic, table: Vec::with_capacity(sections), open: Vec::new(), capacity: sections, end })
+        let chunks = SharedChunks(Arc::new(Mutex::new(Chunks {
+            file: file.try_clone()?,
+            gathering: BTreeMap::new(),
+            written: BTreeSet::new(),
+        })));
+        Ok(FieldFile {
+            file,
+            chunks,
+            magic,
+            table: Vec::with_capacity(sections),
+            open: Vec::new(),
+            capacity: sections,
+            end,
+        })
     }
 
     fn place(&mut self, kind: u32, element_size: u32, length: u64) -> io::Result<(usize, u64)> {
@@ -92,6 +193,9 @@ impl FieldFile {
             return Err(invalid("a streamed section is still open; finish it before adding sections".into()));
         }
         let offset = self.end.next_multiple_of(SECTION_ALIGN);
+        // The padding before the section is written too (as zeros), so that every chunk of the
+        // file completes.
+        self.chunks.write_at(&[0; SECTION_ALIGN as usize][..(offset - self.end) as usize], self.end)?;
         self.table.push(SectionEntry {
             kind,
             codec: codec::RAW,
@@ -120,7 +224,7 @@ impl FieldFile {
             return Err(invalid(format!("section {} is not a whole number of elements", kind_name(kind))));
         }
         let (index, offset) = self.place(kind, element_size, bytes.len() as u64)?;
-        write_all_at(&self.file, bytes, offset)?;
+        self.chunks.write_at(bytes, offset)?;
         self.table[index].raw_hash = *blake3::hash(bytes).as_bytes();
         Ok(())
     }
@@ -141,7 +245,7 @@ impl FieldFile {
         while done < length {
             let want = buf.len().min((length - done) as usize);
             reader.read_exact(&mut buf[..want])?;
-            write_all_at(&self.file, &buf[..want], offset + done)?;
+            self.chunks.write_at(&buf[..want], offset + done)?;
             done += want as u64;
         }
         self.table[index].raw_hash = raw_hash;
@@ -174,7 +278,7 @@ impl FieldFile {
 
     fn writer(&self, index: usize, start: u64, reserved: Option<u64>) -> io::Result<SectionWriter> {
         Ok(SectionWriter {
-            file: self.file.try_clone()?,
+            chunks: self.chunks.clone(),
             index,
             start,
             reserved,
@@ -245,7 +349,10 @@ impl FieldFile {
         head.extend_from_slice(bytemuck::cast_slice(&self.table));
         header.content_hash = content_hash(&head);
         head[CONTENT_HASH_RANGE].copy_from_slice(&header.content_hash);
-        write_all_at(&self.file, &head, 0)?;
+        let mut chunks = self.chunks.lock();
+        chunks.write_at(&head, 0)?;
+        chunks.flush(self.end)?;
+        drop(chunks);
         Ok((self.file, header))
     }
 }
@@ -254,7 +361,7 @@ impl SectionWriter {
     fn flush_buf(&mut self) -> io::Result<()> {
         if !self.buf.is_empty() {
             let at = self.start + self.written - self.buf.len() as u64;
-            write_all_at(&self.file, &self.buf, at)?;
+            self.chunks.write_at(&self.buf, at)?;
             self.buf.clear();
         }
         Ok(())
@@ -279,7 +386,7 @@ impl Write for SectionWriter {
         }
         self.hasher.update(data);
         if data.len() >= BUFFER {
-            write_all_at(&self.file, data, self.start + self.written)?;
+            self.chunks.write_at(data, self.start + self.written)?;
         } else {
             self.buf.extend_from_slice(data);
         }
@@ -289,6 +396,53 @@ impl Write for SectionWriter {
 
     fn flush(&mut self) -> io::Result<()> {
         self.flush_buf()
+    }
+}
+
+/// A sequential writer that hands its inner writer whole [`WRITE_CHUNK`]s (2 MiB), each starting
+/// where the previous one ended: written from the start of a file, every write is a whole,
+/// aligned huge page (see the module documentation), except the last. For copying fields
+/// (`vlf-bake unpack`, the bake cache) so that the copy maps with huge pages too.
+///
+/// [`Write::flush`] writes what is buffered, as it must: a writer flushed before its end loses the
+/// alignment from there on (not the bytes). [`AlignedWriter::finish`] flushes and returns the
+/// inner writer.
+pub struct AlignedWriter<W: Write> {
+    inner: W,
+    buf: Vec<u8>,
+}
+
+impl<W: Write> AlignedWriter<W> {
+    pub fn new(inner: W) -> Self {
+        AlignedWriter { inner, buf: Vec::with_capacity(WRITE_CHUNK) }
+    }
+
+    /// Writes what is buffered and returns the inner writer, flushed.
+    pub fn finish(mut self) -> io::Result<W> {
+        self.flush()?;
+        let AlignedWriter { inner, .. } = self;
+        Ok(inner)
+    }
+}
+
+impl<W: Write> Write for AlignedWriter<W> {
+    fn write(&mut self, data: &[u8]) -> io::Result<usize> {
+        // A full chunk goes out before more is taken, so that an error takes none of `data`.
+        if self.buf.len() == WRITE_CHUNK {
+            self.inner.write_all(&self.buf)?;
+            self.buf.clear();
+        }
+        let n = data.len().min(WRITE_CHUNK - self.buf.len());
+        self.buf.extend_from_slice(&data[..n]);
+        Ok(n)
+    }
+
+    fn flush(&mut self) -> io::Result<()> {
+        if !self.buf.is_empty() {
+            self.inner.write_all(&self.buf)?;
+            self.buf.clear();
+        }
+        self.inner.flush()
     }
 }
 
@@ -359,5 +513,68 @@ mod tests {
             assert_eq!(*blake3::hash(raw).as_bytes(), e.raw_hash);
         }
         assert_eq!(&bytes[table[1].offset as usize..][..8], &[9, 0, 0, 0, 8, 0, 0, 0]);
+    }
+
+    /// Sections larger than a chunk, written in odd pieces and interleaved (a reserved section
+    /// filled while another streams), read back byte for byte: the chunks gather every byte.
+    #[test]
+    fn sections_across_chunks_read_back() {
+        let dir = std::env::temp_dir().join(format!("vlf-writer-chunks-{}", std::process::id()));
+        let file = File::options().read(true).write(true).create(true).truncate(true).open(&dir).unwrap();
+        let pattern = |seed: u8, len: usize| -> Vec<u8> {
+            (0..len).map(|i| (i as u32).wrapping_mul(2_654_435_761).to_le_bytes()[3] ^ seed).collect()
+        };
+        let (a, b, c) =
+            (pattern(1, 3 * WRITE_CHUNK + 5), pattern(2, 5 * WRITE_CHUNK / 2 + 8), pattern(3, 4 * WRITE_CHUNK + 76));
+        let mut f = FieldFile::create(file, 3).unwrap();
+        f.append(SectionKind::Strings, &a).unwrap();
+        let mut reserved = f.reserve(SectionKind::Leaves, b.len() as u64).unwrap();
+        let mut streamed = f.stream(SectionKind::Tiles).unwrap();
+        let (mut rb, mut rc) = (&b[..], &c[..]);
+        while !rb.is_empty() || !rc.is_empty() {
+            let (nb, nc) = (rb.len().min(333_333 * 8), rc.len().min(1_234_567));
+            reserved.write_all(&rb[..nb]).unwrap();
+            streamed.write_all(&rc[..nc]).unwrap();
+            (rb, rc) = (&rb[nb..], &rc[nc..]);
+        }
+        f.finish_section(streamed).unwrap();
+        f.finish_section(reserved).unwrap();
+        let (_, header) = f.finish([9; 32]).unwrap();
+        let bytes = std::fs::read(&dir).unwrap();
+        std::fs::remove_file(&dir).unwrap();
+        assert_eq!(header.file_length, bytes.len() as u64);
+        let (_, table) = crate::reader::read_header_and_table(&bytes).unwrap();
+        for (e, want) in table.iter().zip([&a, &b, &c]) {
+            assert_eq!(&bytes[e.offset as usize..(e.offset + e.stored_length) as usize], &want[..]);
+            assert_eq!(*blake3::hash(want).as_bytes(), e.raw_hash);
+        }
+        // The padding between sections is zero.
+        for w in table.windows(2) {
+            assert!(bytes[(w[0].offset + w[0].stored_length) as usize..w[1].offset as usize].iter().all(|&x| x == 0));
+        }
+    }
+
+    /// An aligned writer hands on whole chunks, the last one short, and every byte in order.
+    #[test]
+    fn aligned_writer_writes_whole_chunks() {
+        struct Record(Vec<u8>, Vec<usize>);
+        impl Write for Record {
+            fn write(&mut self, b: &[u8]) -> io::Result<usize> {
+                self.0.extend_from_slice(b);
+                self.1.push(b.len());
+                Ok(b.len())
+            }
+            fn flush(&mut self) -> io::Result<()> {
+                Ok(())
+            }
+        }
+        let data: Vec<u8> = (0..2 * WRITE_CHUNK + 12_345).map(|i| (i % 251) as u8).collect();
+        let mut w = AlignedWriter::new(Record(Vec::new(), Vec::new()));
+        for piece in data.chunks(100_000) {
+            w.write_all(piece).unwrap();
+        }
+        let Record(out, writes) = w.finish().unwrap();
+        assert_eq!(out, data);
+        assert_eq!(writes, [WRITE_CHUNK, WRITE_CHUNK, 12_345]);
     }
 }
