@@ -2,7 +2,7 @@
 //! single-ray query the peers benchmark times, in a program small enough to run under callgrind.
 //!
 //! ```text
-//! cargo run --release -p vlf-runtime --example single_ray -- FIELD RAYS [--any] [--count N] [--rounds R] [--work]
+//! cargo run --release -p vlf-runtime --example single_ray -- FIELD RAYS [--any] [--count N] [--rounds R] [--work] [--read]
 //! ```
 //!
 //! `RAYS` is a file of 32-byte ray records (`formats/rays.md`). Each round traces the first `N`
@@ -11,26 +11,27 @@
 //! under callgrind: run once with `--count N --rounds 1` and once with `--count 1 --rounds 1`, and
 //! divide the difference by `N − 1` (`docs/benchmarks/single-ray.sh` does this). `--work` also
 //! prints the work per ray of one more pass over the same rays (`*_counted`): tiles, leaves and
-//! triangle tests.
+//! triangle tests. `--read` reads the field into memory (`Field::read`) instead of mapping it.
 
 use std::time::Instant;
 use vlf_runtime::{Field, Intersector, Ray, TraceStats};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let usage = "usage: single_ray FIELD RAYS [--any] [--count N] [--rounds R] [--work]";
+    let usage = "usage: single_ray FIELD RAYS [--any] [--count N] [--rounds R] [--work] [--read]";
     let mut args = std::env::args().skip(1);
     let (field, rays) = (args.next().ok_or(usage)?, args.next().ok_or(usage)?);
-    let (mut any, mut count, mut rounds, mut work) = (false, None, 5usize, false);
+    let (mut any, mut count, mut rounds, mut work, mut read) = (false, None, 5usize, false, false);
     while let Some(flag) = args.next() {
         match flag.as_str() {
             "--any" => any = true,
             "--work" => work = true,
+            "--read" => read = true,
             "--count" => count = Some(args.next().ok_or(usage)?.parse::<usize>()?),
             "--rounds" => rounds = args.next().ok_or(usage)?.parse()?,
             _ => return Err(format!("unknown argument {flag}; {usage}").into()),
         }
     }
-    let field = Field::open(&field)?;
+    let field = if read { Field::read(&field)? } else { Field::open(&field)? };
     let bytes = std::fs::read(&rays)?;
     let rays = match Ray::from_records(&bytes) {
         Some(rays) if !rays.is_empty() => rays,
