@@ -10,7 +10,7 @@ use std::path::Path;
 use vlf_bake::import::import_bytes;
 use vlf_bake::{Scene, SceneBuilder};
 use vlf_format::{CONTENT_HASH_RANGE, HEADER_SIZE, Header, MAX_SECTIONS, SectionEntry, TABLE_ENTRY_SIZE, codec};
-use vlf_geom::{Hit, Ray, TraceStats};
+use vlf_geom::{Hit, Ray, TraceStats, TriRay};
 use vlf_runtime::{Field, FieldView, Interleave};
 
 /// At most this many rays are decoded from the bytes after a field.
@@ -163,9 +163,10 @@ fn check_queries(field: &Field, ray: &Ray) {
     let view = field.view();
     let closest = field.closest_hit(ray);
     let any = field.any_hit(ray);
-    // Both walk the same leaves in the same order; the first triangle hit ends any-hit and is
-    // recorded by closest-hit.
-    assert_eq!(any, closest.is_some(), "any_hit and closest_hit disagree for {ray:?}");
+    // On a file that keeps the format's promises the two agree (the oracle suites check both
+    // against the brute force), but an any-hit search may walk a segment from its far end
+    // (`vlf-runtime`'s `Setup::for_any_hit`), so on a file that lies they may see different
+    // leaves. Whatever the file, a hit either reports is one: the kernel confirms it below.
     let mut stats = TraceStats::default();
     assert_eq!(view.closest_hit_counted(ray, &mut stats), closest, "counting changed the answer for {ray:?}");
     let first = view.any_hit_counted(ray, &mut stats);
@@ -182,8 +183,17 @@ fn check_queries(field: &Field, ray: &Ray) {
         stats.cells
     );
     for hit in closest.iter().chain(&first) {
-        assert!(field.triangle(hit.prim).is_some(), "hit names triangle {} of {}", hit.prim, field.triangle_count());
+        let tri = field.triangle_local(hit.prim);
+        assert!(tri.is_some(), "hit names triangle {} of {}", hit.prim, field.triangle_count());
         assert!(ray.tmin <= hit.t && hit.t <= ray.tmax, "hit t = {} outside [{}, {}]", hit.t, ray.tmin, ray.tmax);
+        // The hit is the kernel's answer for that triangle.
+        let c = tri.and_then(|tri| TriRay::relative(ray, field.origin()).candidate(&tri));
+        assert_eq!(
+            c.map(|c| c.t as f32),
+            Some(hit.t),
+            "{ray:?} reports a hit on {} that the kernel does not",
+            hit.prim
+        );
         let _ = field.provenance(hit.prim);
     }
     if !ray.is_valid() {

@@ -435,7 +435,9 @@ pub fn ray_families(field: &Field, per_family: usize, seed: u64) -> Vec<(&'stati
 
     // What a renderer traces after a hit: rays leaving a point on a triangle, to a light (the
     // segment short of both ends, as shadow rays are) or in any direction (a bounce). Any-hit
-    // searches put off the leaf such a ray starts in (`vlf-runtime`'s `OriginLeaf`).
+    // searches walk such a segment from its far end if it leaves the scene, and otherwise put off
+    // the leaf it starts in (`vlf-runtime`'s `Setup::for_any_hit`): lights inside and outside
+    // the scene's box give both.
     let leaving: Vec<Ray> = (0..per_family)
         .map(|_| {
             let t = &tris[(rng.next_u64() % tris.len() as u64) as usize];

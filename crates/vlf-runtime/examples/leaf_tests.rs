@@ -10,8 +10,9 @@
 //! `RAYS` is a file of 32-byte ray records (`formats/rays.md`), traced by
 //! `FieldView::closest_hit_counted` (or `any_hit_counted` with `--any`) with a counter that
 //! splits the tests by leaf. Leaves past the sixteenth are counted with it. An any-hit search
-//! tests the leaf it starts in last, without reaching it again: those tests are counted with the
-//! last leaf the ray reached (the first leaf then shows none).
+//! walks a segment that leaves the scene from its far end (ranks then count from there), and
+//! otherwise tests the leaf it starts in last, without reaching it again: those tests are
+//! counted with the last leaf the ray reached (the first leaf then shows none).
 
 use vlf_geom::Counter;
 use vlf_runtime::{Field, Ray};

@@ -8,8 +8,8 @@
 //! and comes back to the first when its data has had time to arrive (asynchronous memory access
 //! chaining: Kocberber et al., "Asynchronous Memory Access Chaining", VLDB 2015). Each ray sees
 //! the same leaves in the same order and runs the same leaf tests as a single closest-hit query,
-//! so a batch gives the same answers, bit for bit, in the rays' order. An any-hit ray, as in the
-//! single query, searches the leaf it starts in last.
+//! so a batch gives the same answers, bit for bit, in the rays' order. An any-hit ray walks as in
+//! the single query (`Setup::for_any_hit`).
 
 use crate::filter::Passing;
 use crate::prefetch::prefetch;
@@ -58,8 +58,9 @@ struct Lane<'a, S> {
     tri_ray: TriRay,
     state: S,
     pending: Pending<'a>,
-    /// For an any-hit search: whether the ray has reached no leaf yet, and the leaf it starts in,
-    /// put off until its walk ends (as the single-ray query does: `crate::trace`'s `OriginLeaf`).
+    /// For an any-hit search that puts off the leaf where its walk starts
+    /// (`Setup::for_any_hit`): whether the ray has reached no leaf yet, and that leaf, put off
+    /// until its walk ends (as the single-ray query does: `crate::trace`'s `OriginLeaf`).
     undecided: bool,
     deferred: Option<Leaf<'a>>,
 }
@@ -202,7 +203,12 @@ impl<'a> FieldView<'a> {
             while let Some(ray) = rays.get(*next) {
                 let index = *next;
                 *next += 1;
-                if let Some(setup) = self.setup(ray, origin)
+                // An any-hit ray's walk, as the single-ray query's (`Setup::for_any_hit`).
+                let setup = match self.setup(ray, origin) {
+                    Some(setup) if defer_origin => Some(setup.for_any_hit()),
+                    other => other.map(|setup| (setup, false)),
+                };
+                if let Some((setup, undecided)) = setup
                     && let Some(walk) = Walk::new(&self.reader, &self.grid, &setup)
                 {
                     let tri_ray = TriRay::relative(ray, origin);
@@ -213,7 +219,7 @@ impl<'a> FieldView<'a> {
                         tri_ray,
                         state: start(ray),
                         pending: Pending::Nothing,
-                        undecided: defer_origin,
+                        undecided,
                         deferred: None,
                     });
                 }

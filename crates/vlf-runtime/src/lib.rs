@@ -376,8 +376,10 @@ impl Field {
     }
 
     /// Whether `ray` hits anything on `[tmin, tmax]` (a shadow ray); `false` for an invalid ray.
-    /// The walk of [`Field::closest_hit`], stopping at the first hit found; the leaf the ray starts
-    /// in, which holds the surface a shadow ray leaves, is searched last. Allocates nothing.
+    /// The walk of [`Field::closest_hit`], stopping at the first hit found, and ordered so as to
+    /// search the surface a shadow ray leaves last: a segment that leaves the scene (towards a
+    /// light outside it) is walked from that far end, any other from its origin with the leaf it
+    /// starts in searched last. Allocates nothing.
     #[inline]
     pub fn any_hit(&self, ray: &Ray) -> bool {
         self.view().any_hit(ray)

@@ -230,7 +230,7 @@ impl<'a> FieldView<'a> {
     }
 
     /// The first hit found on `[tmin, tmax]` (not necessarily the closest), counting the work:
-    /// the walk of [`Self::closest_hit`], with the leaf the ray starts in searched last.
+    /// the walk of [`Self::closest_hit`], ordered as [`crate::Field::any_hit`] says.
     pub fn any_hit_counted(&self, ray: &Ray, counter: &mut impl Counter) -> Option<Hit> {
         self.any(ray, self.center, counter)
     }
@@ -367,11 +367,18 @@ impl<'a> FieldView<'a> {
         tris: &impl Triangles,
         counter: &mut impl Counter,
     ) -> Option<Hit> {
-        let setup = self.setup(ray, origin)?;
+        let (setup, defer_origin) = self.setup(ray, origin)?.for_any_hit();
         counter.ray();
-        let mut search = AnySearch { isa, ray: TriRay::relative(ray, origin), tris, found: None };
-        trace(&self.reader, &self.grid, &setup, &mut search, counter);
-        search.found
+        let ray = TriRay::relative(ray, origin);
+        if defer_origin {
+            let mut search = AnySearch::<_, _, true> { isa, ray, tris, found: None };
+            trace(&self.reader, &self.grid, &setup, &mut search, counter);
+            search.found
+        } else {
+            let mut search = AnySearch::<_, _, false> { isa, ray, tris, found: None };
+            trace(&self.reader, &self.grid, &setup, &mut search, counter);
+            search.found
+        }
     }
 
     /// [`Self::closest_hit_local`] with the triangles read through `tris` instead of the field's

@@ -6,8 +6,9 @@
 //! triangles started loading together, then tested four at a time by the leaf kernel
 //! ([`vlf_geom::TriRay::closest4`], [`vlf_geom::TriRay::any4`]). The search stops once the best hit
 //! lies within the part of the ray already searched (closest hit) or at the first hit (any hit).
-//! An any-hit search puts off the leaf where the ray starts until the rest is searched
-//! ([`OriginLeaf`]): a shadow ray's occluder is seldom in the surface it leaves.
+//! An any-hit search walks a segment that leaves the scene from that far end, and puts off the
+//! leaf where any other segment starts until the rest is searched ([`OriginLeaf`]): a shadow ray's
+//! occluder is seldom in the surface it leaves (`crate::walk::Setup::for_any_hit`).
 //!
 //! It visits the tiles and leaves that [`crate::walk`]'s parts visit, in the same order, but is
 //! written out on its own, without closures: it is compiled inside the queries built for AVX2 and
@@ -80,15 +81,16 @@ impl<'t, I: Isa, T: Triangles + ?Sized + 't> Search<'t> for ClosestSearch<'t, I,
     const DEFER_ORIGIN: bool = false;
 }
 
-/// The any-hit search.
-pub(crate) struct AnySearch<'t, I, T: ?Sized> {
+/// The any-hit search; with `DEFER`, the leaf where the walk starts is searched last
+/// ([`OriginLeaf`]).
+pub(crate) struct AnySearch<'t, I, T: ?Sized, const DEFER: bool> {
     pub(crate) isa: I,
     pub(crate) ray: TriRay,
     pub(crate) tris: &'t T,
     pub(crate) found: Option<Hit>,
 }
 
-impl<'t, I: Isa, T: Triangles + ?Sized + 't> Search<'t> for AnySearch<'t, I, T> {
+impl<'t, I: Isa, T: Triangles + ?Sized + 't, const DEFER: bool> Search<'t> for AnySearch<'t, I, T, DEFER> {
     type Tris = T;
     #[inline(always)]
     fn tris(&self) -> &'t T {
@@ -111,7 +113,7 @@ impl<'t, I: Isa, T: Triangles + ?Sized + 't> Search<'t> for AnySearch<'t, I, T> 
     fn done(&self, _exit: f64) -> bool {
         self.found.is_some()
     }
-    const DEFER_ORIGIN: bool = true;
+    const DEFER_ORIGIN: bool = DEFER;
 }
 
 /// Cache lines of refs started loading when a ray enters a tile, from its entry leaf on.

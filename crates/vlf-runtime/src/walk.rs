@@ -9,7 +9,8 @@
 //! before coming back to it, so that their cache misses overlap. The single-ray closest-hit and
 //! any-hit queries run the same tiles and leaves in the same order as a loop nest of their own
 //! ([`crate::trace`], measured faster than these parts assembled; its any-hit search puts off the
-//! leaf the ray starts in until the rest is searched). All see the same tiles and leaves, closest
+//! leaf the ray starts in until the rest is searched, or walks a segment that leaves the scene
+//! from its far end: [`Setup::for_any_hit`]). All see the same tiles and leaves, closest
 //! hits in the same order, and the closest hit does not depend on the order of the tests
 //! ([`vlf_geom::Closest::take`]) nor whether anything is hit on the order of the leaves, so they
 //! give the same answers.
@@ -72,6 +73,41 @@ pub(crate) struct Setup {
     pub(crate) dq: f64,
     pub(crate) inv_dq: f64,
     pub(crate) up: bool,
+    /// Whether the segment ends where it leaves the scene (before the ray's `tmax`), not inside it.
+    pub(crate) ends_outside: bool,
+}
+
+impl Setup {
+    /// The same segment walked from its far end: the ray reversed, starting at `t1`. Its walk
+    /// visits the tiles and leaves of this one in the opposite order (the grid is the same and
+    /// the rounding of the reversed origin, far below the margin, is covered by it); a ray
+    /// parameter `t'` of it is `t1 − t'` of this one.
+    pub(crate) fn reversed(&self) -> Setup {
+        let (o, d, t1) = (self.o, self.d, self.t1);
+        Setup {
+            dir: self.dir,
+            o: [o[0] + t1 * d[0], o[1] + t1 * d[1], o[2] + t1 * d[2]],
+            d: [-d[0], -d[1], -d[2]],
+            t0: 0.0,
+            t1: t1 - self.t0,
+            oq: self.oq + t1 * self.dq,
+            dq: -self.dq,
+            inv_dq: -self.inv_dq,
+            up: !self.up,
+            ends_outside: false,
+        }
+    }
+
+    /// The walk of an any-hit search, and whether it puts off the leaf where it starts: a segment
+    /// that leaves the scene is walked from that far end, through the scene's emptier margins
+    /// first and its origin's crowded surroundings last; a segment that ends inside the scene
+    /// (ambient occlusion) from its origin, putting off the leaf of the surface it leaves
+    /// ([`crate::trace`]'s `OriginLeaf`). Either way every leaf the segment passes is searched
+    /// unless a hit is found, so the answer is the same; only which hit is found, and how soon,
+    /// differ.
+    pub(crate) fn for_any_hit(self) -> (Setup, bool) {
+        if self.ends_outside { (self.reversed(), false) } else { (self, true) }
+    }
 }
 
 impl Setup {
@@ -573,7 +609,40 @@ impl<'a> Walk<'a> {
 
 #[cfg(test)]
 mod tests {
-    use super::entry_leaf;
+    use super::{Setup, entry_leaf};
+
+    /// A reversed segment is the same segment: its point at `t'` is the original's at `t1 − t'`,
+    /// its beam coordinate runs the other way, and reversing twice gives the original back.
+    #[test]
+    fn a_reversed_segment_is_the_same_segment_from_its_far_end() {
+        let s = Setup {
+            dir: 3,
+            o: [0.25, -0.5, -2.0],
+            d: [0.1, 0.05, 1.0],
+            t0: 0.5,
+            t1: 3.5,
+            oq: 100.0,
+            dq: 400.0,
+            inv_dq: 1.0 / 400.0,
+            up: true,
+            ends_outside: true,
+        };
+        let r = s.reversed();
+        assert_eq!((r.dir, r.t0, r.t1, r.up, r.ends_outside), (3, 0.0, 3.0, false, false));
+        for t in [0.0, 0.75, 1.5, 3.0] {
+            let (a, b) = (s.t1 - t, t);
+            for k in 0..3 {
+                assert!((s.o[k] + a * s.d[k] - (r.o[k] + b * r.d[k])).abs() < 1e-12, "t' = {t}");
+            }
+            assert!((s.oq + a * s.dq - (r.oq + b * r.dq)).abs() < 1e-9);
+        }
+        let rr = r.reversed();
+        assert_eq!((rr.t0, rr.t1, rr.up), (0.0, 3.0, true));
+        assert!((0..3).all(|k| (rr.o[k] - (s.o[k] + s.t0 * s.d[k])).abs() < 1e-12));
+        // An any-hit search walks the segment from its far end if it leaves the scene.
+        assert!(!s.for_any_hit().1);
+        assert!(Setup { ends_outside: false, ..s }.for_any_hit().1);
+    }
 
     /// [`entry_leaf`] is the binary search it replaces, on boundaries in order, for coordinates
     /// on, between, below and above them (and a NaN, which counts nothing).
