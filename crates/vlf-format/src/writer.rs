@@ -10,7 +10,7 @@
 //!
 //! Every byte reaches the file in a write of a whole [`WRITE_CHUNK`] (2 MiB) aligned on the file,
 //! except at its end: sections written in pieces and at different places are gathered into their
-//! chunks first ([`Chunks`]). Where the file system caches files in large folios (Linux ext4 from
+//! chunks first (`Chunks`). Where the file system caches files in large folios (Linux ext4 from
 //! 6.16, XFS), a file written this way sits in the page cache in huge-page-sized pieces, which a
 //! reader's memory map then maps with huge pages: a query touching a large field takes far fewer
 //! TLB misses (`docs/benchmarks/where-the-time-goes.md`). Elsewhere it is ordinary buffering.
