@@ -9,13 +9,16 @@
 # views, `vlf-bake rays`) and their middle 64 rows (SCENE-outside.bin, SCENE-inside.bin); 20,000
 # incoherent rays (origins in the scene's box, random directions, seed 1); and shadow rays (any
 # hit) from every eighth inside hit towards the peers' light, `centre + (0.3, 3, 0.2)·R`; and
-# ambient-occlusion (`-ao-shadow`) and bounce rays from every fourth inside hit. For the
+# ambient-occlusion (`-ao-shadow`) and bounce rays from every fourth inside hit. Two warm sets,
+# whose field lines stay cached from one pass to the next, tell a query's work from its waiting
+# on memory: SCENE-incoherent-warm.bin (the first 500 incoherent rays, 40 times) and
+# SCENE-outside-warm.bin (the outside view's middle row, 512 rays, 40 times). For the
 # random scenes of the peers benchmark, make the mesh first, e.g.
 # `vlf-bake gen random --count 100000 --size 0.0232 --seed 1 -o target/single-ray/r100kd.obj`.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 exec < <(:)
-[ $# -ge 1 ] || { sed -n 2,14p "$0" >&2; exit 2; }
+[ $# -ge 1 ] || { sed -n 2,17p "$0" >&2; exit 2; }
 s=$1
 W=target/single-ray
 mkdir -p "$W"
@@ -49,6 +52,9 @@ for _ in range(20_000):
     q = math.sqrt(1.0 - z * z)
     out.append(struct.pack("<8f", *o, 0.0, q * math.cos(a), q * math.sin(a), z, float("inf")))
 open(f"{w}/{s}-incoherent.bin", "wb").write(b"".join(out))
+open(f"{w}/{s}-incoherent-warm.bin", "wb").write(b"".join(out[:500]) * 40)
+data = open(f"{w}/{s}-outside-all.bin", "rb").read()
+open(f"{w}/{s}-outside-warm.bin", "wb").write(data[32 * 512 * 256 : 32 * 512 * 257] * 40)
 # Shadow rays, as the peers make them: from each hit of the inside view towards the light, on
 # [1e-4, 1 - 1e-4] of the segment.
 light = [c[0] + 0.3 * r, c[1] + 3.0 * r, c[2] + 0.2 * r]
