@@ -167,7 +167,7 @@ impl Baked {
 /// spill file): the whole field, or with `shard` one shard of it (`formats/vlf-shard.md`).
 ///
 /// The file is written in place, each byte once: the shared sections first (after the SHARD
-/// record of a shard), then the per-direction sections ([`DirectionSections`]). Leaves the
+/// record of a shard), then the per-direction sections (`DirectionSections`). Leaves the
 /// "writing" progress phase open; the caller ends it after committing the file.
 pub fn write_into(
     prep: &Prepared<'_>,

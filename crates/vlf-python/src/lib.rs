@@ -3,11 +3,11 @@
 //! `tmax`) and names the results; this module checks shapes and values, releases the GIL and
 //! runs the queries on a thread pool.
 //!
-//! - [`field`]: the `Field` class (open, metadata, queries).
-//! - [`rays`]: numpy arrays (f32 or f64, any strides) to rays, checked.
-//! - [`bake`]: bakes from mesh files and from triangle arrays, through the bake cache.
-//! - [`threads`]: the `threads` argument as a rayon pool.
-//! - [`errors`]: the package's exceptions and how Rust errors map to Python's.
+//! - `field`: the `Field` class (open, metadata, queries).
+//! - `rays`: numpy arrays (f32 or f64, any strides) to rays, checked.
+//! - `bake`: bakes from mesh files and from triangle arrays, through the bake cache.
+//! - `threads`: the `threads` argument as a rayon pool.
+//! - `errors`: the package's exceptions and how Rust errors map to Python's.
 
 mod bake;
 mod errors;

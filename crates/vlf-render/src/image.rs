@@ -80,7 +80,7 @@ const INFERNO: [[f64; 3]; 9] = [
     [252.0, 255.0, 164.0],
 ];
 
-/// The colour of `t` in `[0, 1]` on [`INFERNO`].
+/// The colour of `t` in `[0, 1]` on the inferno colour map (nine stops, linearly interpolated).
 pub fn inferno(t: f64) -> [u8; 3] {
     let x = if t.is_nan() { 0.0 } else { t.clamp(0.0, 1.0) } * (INFERNO.len() - 1) as f64;
     let i = (x as usize).min(INFERNO.len() - 2);

@@ -8,7 +8,7 @@
 //!   damaged file names (`vlf_geom::Triangles`). The ids stay in the mapped leaves (they cannot be
 //!   written), so removed triangles still cost a box test where they were.
 //! - **Inserting** triangles rasterises them into the field's directions, tiles and leaves with
-//!   the bake's kernel, in an overlay kept beside the mapped bytes ([`crate::overlay`]); they get
+//!   the bake's kernel, in an overlay kept beside the mapped bytes (the private `overlay` module); they get
 //!   the ids after the field's own, in order, never reused. Removing an inserted triangle removes
 //!   it from the overlay's tiles the paper's way (rasterised again, its id taken out).
 //! - **Moving** an object is removing it and inserting it transformed.

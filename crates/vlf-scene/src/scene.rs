@@ -1,5 +1,5 @@
 //! A scene of instances: fields placed by affine transforms, each with an id and a mask, under a
-//! top-level hierarchy over their world boxes ([`crate::bvh`]).
+//! top-level hierarchy over their world boxes (the private `bvh` module).
 //!
 //! A ray is tested against the hierarchy in world space; for each instance whose box it enters
 //! (nearest first), whose mask it shares a bit with, it is moved into the instance's field (the

@@ -7,7 +7,7 @@
 //! parameters and open it; make the ray sets ([`rays`]; the shadow rays start from the field's
 //! primary hits); build the other contestants; check a sample of every set against the brute
 //! force ([`check`]); time every contestant on every set at each thread count ([`time_set`]);
-//! with `--sweep`, bake the field again at explicit parameters and time it ([`sweep`]). The report
+//! with `--sweep`, bake the field again at explicit parameters and time it. The report
 //! ([`report`]) is rewritten after every scene, so a long run leaves its finished scenes behind.
 
 pub mod check;
@@ -58,7 +58,7 @@ fn field_info(f: &FieldContestant, triangles: usize) -> FieldInfo {
 }
 
 /// Times `c` on `set` in `pool`: one warm-up run, then `repeats` timed runs; rays are split into
-/// chunks of [`CHUNK`] that the pool's threads take in turn, one query per ray.
+/// chunks of `CHUNK` (1,024) that the pool's threads take in turn, one query per ray.
 pub fn time_set(c: &dyn Contestant, set: &RaySet, pool: &rayon::ThreadPool, repeats: usize) -> (f64, Vec<f64>) {
     let mut closest: Vec<Option<PeerHit>> = vec![None; set.rays.len()];
     let mut any = vec![false; set.rays.len()];
