@@ -205,7 +205,7 @@ impl<'a> FieldView<'a> {
                 *next += 1;
                 // An any-hit ray's walk, as the single-ray query's (`Setup::for_any_hit`).
                 let setup = match self.setup(ray, origin) {
-                    Some(setup) if defer_origin => Some(setup.for_any_hit()),
+                    Some(setup) if defer_origin => Some(setup.for_any_hit(ray.tmax as f64, self.grid.radius)),
                     other => other.map(|setup| (setup, false)),
                 };
                 if let Some((setup, undecided)) = setup

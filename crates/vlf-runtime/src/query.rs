@@ -367,18 +367,26 @@ impl<'a> FieldView<'a> {
         tris: &impl Triangles,
         counter: &mut impl Counter,
     ) -> Option<Hit> {
-        let (setup, defer_origin) = self.setup(ray, origin)?.for_any_hit();
+        let (setup, defer_origin) = self.setup(ray, origin)?.for_any_hit(ray.tmax as f64, self.grid.radius);
         counter.ray();
         let ray = TriRay::relative(ray, origin);
         if defer_origin {
-            let mut search = AnySearch::<_, _, true> { isa, ray, tris, found: None };
-            trace(&self.reader, &self.grid, &setup, &mut search, counter);
-            search.found
+            self.any_walk::<true>(AnySearch { isa, ray, tris, found: None }, &setup, counter)
         } else {
-            let mut search = AnySearch::<_, _, false> { isa, ray, tris, found: None };
-            trace(&self.reader, &self.grid, &setup, &mut search, counter);
-            search.found
+            self.any_walk::<false>(AnySearch { isa, ray, tris, found: None }, &setup, counter)
         }
+    }
+
+    /// Runs `search` over the walk of `setup`; the first hit found.
+    #[inline(always)]
+    fn any_walk<'t, const DEFER: bool>(
+        &self,
+        mut search: AnySearch<'t, impl Isa, impl Triangles + 't, DEFER>,
+        setup: &Setup,
+        counter: &mut impl Counter,
+    ) -> Option<Hit> {
+        trace(&self.reader, &self.grid, setup, &mut search, counter);
+        search.found
     }
 
     /// [`Self::closest_hit_local`] with the triangles read through `tris` instead of the field's

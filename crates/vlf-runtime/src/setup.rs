@@ -139,18 +139,9 @@ impl<'a> Aim<'a> {
         }
         let inv_step = self.levels_per_unit;
         let (oq, dq) = ((o[2] + self.radius) * inv_step, dc[2] * inv_step);
-        // Walked from its far end by an any-hit search (`Setup::for_any_hit`) if it leaves the
-        // scene, and if its origin is near enough for the far end to be computed to well within
-        // the margin (the range `formats/vlf.md` §6.2 guarantees, 10⁸ R, with room to spare).
-        let near = o.iter().all(|c| c.abs() <= NEAR_ORIGIN * self.radius);
-        let ends_outside = t1 < ray.tmax as f64 && near;
-        Some(Setup { dir, o, d: dc, t0, t1, oq, dq, inv_dq: 1.0 / dq, up: dq > 0.0, ends_outside })
+        Some(Setup { dir, o, d: dc, t0, t1, oq, dq, inv_dq: 1.0 / dq, up: dq > 0.0 })
     }
 }
-
-/// How far from the scene's centre, in radii, a ray may start for an any-hit search to walk it
-/// from its far end: 2²⁶ (about 6.7 · 10⁷).
-const NEAR_ORIGIN: f64 = (1u64 << 26) as f64;
 
 /// Lattices of up to this many segments per octahedron edge (`2·8² + 1 = 129` directions) read
 /// their nearest lattice point from [`FINE`].

@@ -73,9 +73,11 @@ pub(crate) struct Setup {
     pub(crate) dq: f64,
     pub(crate) inv_dq: f64,
     pub(crate) up: bool,
-    /// Whether the segment ends where it leaves the scene (before the ray's `tmax`), not inside it.
-    pub(crate) ends_outside: bool,
 }
+
+/// How far from the scene's centre, in radii, a ray may start for an any-hit search to walk it
+/// from its far end: 2²⁶ (about 6.7 · 10⁷).
+const NEAR_ORIGIN: f64 = (1u64 << 26) as f64;
 
 impl Setup {
     /// The same segment walked from its far end: the ray reversed, starting at `t1`. Its walk
@@ -94,19 +96,22 @@ impl Setup {
             dq: -self.dq,
             inv_dq: -self.inv_dq,
             up: !self.up,
-            ends_outside: false,
         }
     }
 
-    /// The walk of an any-hit search, and whether it puts off the leaf where it starts: a segment
-    /// that leaves the scene is walked from that far end, through the scene's emptier margins
+    /// The walk of an any-hit search for a ray ending at `tmax`, in a scene of `radius`, and
+    /// whether it puts off the leaf where it starts: a segment that leaves the scene (ends before
+    /// `tmax`) is walked from that far end, if its origin is near enough for the far end to be
+    /// computed to well within the margin (within [`NEAR_ORIGIN`] radii: the range
+    /// `formats/vlf.md` §6.2 guarantees, 10⁸ R, with room to spare), through the scene's emptier margins
     /// first and its origin's crowded surroundings last; a segment that ends inside the scene
     /// (ambient occlusion) from its origin, putting off the leaf of the surface it leaves
     /// ([`crate::trace`]'s `OriginLeaf`). Either way every leaf the segment passes is searched
     /// unless a hit is found, so the answer is the same; only which hit is found, and how soon,
     /// differ.
-    pub(crate) fn for_any_hit(self) -> (Setup, bool) {
-        if self.ends_outside { (self.reversed(), false) } else { (self, true) }
+    pub(crate) fn for_any_hit(self, tmax: f64, radius: f64) -> (Setup, bool) {
+        let near = self.o.iter().all(|c| c.abs() <= NEAR_ORIGIN * radius);
+        if self.t1 < tmax && near { (self.reversed(), false) } else { (self, true) }
     }
 }
 
@@ -625,10 +630,9 @@ mod tests {
             dq: 400.0,
             inv_dq: 1.0 / 400.0,
             up: true,
-            ends_outside: true,
         };
         let r = s.reversed();
-        assert_eq!((r.dir, r.t0, r.t1, r.up, r.ends_outside), (3, 0.0, 3.0, false, false));
+        assert_eq!((r.dir, r.t0, r.t1, r.up), (3, 0.0, 3.0, false));
         for t in [0.0, 0.75, 1.5, 3.0] {
             let (a, b) = (s.t1 - t, t);
             for k in 0..3 {
@@ -639,9 +643,13 @@ mod tests {
         let rr = r.reversed();
         assert_eq!((rr.t0, rr.t1, rr.up), (0.0, 3.0, true));
         assert!((0..3).all(|k| (rr.o[k] - (s.o[k] + s.t0 * s.d[k])).abs() < 1e-12));
-        // An any-hit search walks the segment from its far end if it leaves the scene.
-        assert!(!s.for_any_hit().1);
-        assert!(Setup { ends_outside: false, ..s }.for_any_hit().1);
+        // An any-hit search walks the segment from its far end if it leaves the scene (ends
+        // before `tmax`) and starts within 2²⁶ radii; otherwise forward, the first leaf put off.
+        let (far, defer) = s.for_any_hit(10.0, 1.0);
+        assert!(!defer && far.t1 == r.t1 && far.o == r.o && !far.up);
+        let (near, defer) = s.for_any_hit(3.5, 1.0);
+        assert!(defer && near.t0 == s.t0 && near.o == s.o && near.up);
+        assert!(s.for_any_hit(10.0, 1e-8).1, "an origin 2·10⁸ radii out is walked forward");
     }
 
     /// [`entry_leaf`] is the binary search it replaces, on boundaries in order, for coordinates
