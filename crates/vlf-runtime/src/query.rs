@@ -1,6 +1,7 @@
 //! The ray query (paper §3.3 and §5), answered straight from the file bytes.
 //!
-//! 1. Clip the ray to the scene: its bounding sphere and its box, both grown by the margin `μ`.
+//! 1. Clip the ray to the scene's box grown by the margin `μ`. (Clipping it to the bounding
+//!    sphere as well measured no faster: `docs/benchmarks/where-the-time-goes.md`.)
 //! 2. Choose the stored direction nearest the ray's by the constant-time lattice lookup, and rotate
 //!    the ray into that direction's canonical frame.
 //! 3. Walk, front to back, every tile its projection crosses (Amanatides and Woo 1987 in the
