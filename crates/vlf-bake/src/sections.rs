@@ -26,8 +26,10 @@ use vlf_geom::frame::frame;
 /// (`formats/vlf.md` §6.3): fewer, longer leaves. Revision 7 refines the automatic parameters'
 /// tiles to 128² only above 750 triangles per non-empty 64² tile, not 400
 /// (`crate::params::DENSE_TILE_LOAD`). Revision 8 stores the triangles in Morton order of their
-/// centroids (`crate::order`, `formats/vlf.md` §5.7), so their ids change.
-pub const BAKER_REVISION: u32 = 8;
+/// centroids (`crate::order`, `formats/vlf.md` §5.7), so their ids change. Revision 9 raises the
+/// smallest budget of automatic parameters from 4 to 16 MiB (`crate::params::MIN_AUTOMATIC_BUDGET`):
+/// scenes of up to about 16,000 triangles may get more directions.
+pub const BAKER_REVISION: u32 = 9;
 
 /// The input hash of `formats/vlf.md` §3.2.
 pub fn input_hash(scene: &Scene, request: &Request) -> [u8; 32] {

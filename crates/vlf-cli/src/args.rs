@@ -90,8 +90,9 @@ pub struct BakeArgs {
     /// parameters stops, leaving nothing behind, as soon as its field would exceed it (e.g. 4GiB, 512MiB, 1e9).
     #[arg(long, default_value = "4GiB", value_parser = size(), value_name = "SIZE", allow_negative_numbers = true)]
     pub max_bytes: u64,
-    /// Automatic parameters aim at no more than this many bytes of field per triangle (a mesh of a
-    /// few triangles still gets 4 MiB, so that it always bakes).
+    /// Automatic parameters aim at no more than this many bytes of field per triangle (any mesh
+    /// gets at least 16 MiB, so that a few triangles always bake and small scenes get the
+    /// directions that make them fast).
     #[arg(long, default_value = "1KiB", value_parser = size(), value_name = "SIZE", allow_negative_numbers = true)]
     pub max_bytes_per_triangle: u64,
     /// Worker threads, 1 to 1024; more than the cores available are reduced to them, with a warning

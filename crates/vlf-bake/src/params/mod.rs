@@ -25,9 +25,15 @@ pub const DEFAULT_MAX_BYTES: u64 = 4 << 30;
 /// (up to 2× at 4 KiB per triangle), never on incoherent ones; 1 KiB is also the size the
 /// project aims at for 1M-triangle scenes. `--max-bytes-per-triangle` buys the rest.
 pub const DEFAULT_MAX_BYTES_PER_TRIANGLE: u64 = 1 << 10;
-/// The smallest budget automatic parameters get, whatever the triangle count, so that a mesh of a
-/// few triangles still bakes (its fixed sections alone exceed a per-triangle allowance).
-pub const MIN_AUTOMATIC_BUDGET: u64 = 4 << 20;
+/// The smallest budget automatic parameters get, whatever the triangle count: 16 MiB. A mesh of a
+/// few triangles still bakes (its fixed sections alone exceed a per-triangle allowance), and a
+/// small scene gets the directions that shorten its walks: measured in the peers benchmark
+/// (`docs/benchmarks/parameters.md`, 2026-12-06), 10,000 random triangles at 51 × 64² (15.3 MiB)
+/// traced primary rays 30–39% faster than at the 19 × 64² that 4 MiB, the floor until baker
+/// revision 9, and 1 KiB per triangle allowed, for incoherent rays 4–8% slower. Doubling the
+/// per-triangle allowance up to 100,000 triangles instead cost those scenes' incoherent rays 15%
+/// for 2–4% on primary rays: their fields outgrow the caches.
+pub const MIN_AUTOMATIC_BUDGET: u64 = 16 << 20;
 /// Automatic refinement stops once the mean number of triangles in a non-empty tile falls to this.
 pub const SPARSE_TILE_LOAD: f64 = 3.0;
 /// Directions baked to estimate a rung's size.

@@ -193,10 +193,12 @@ fn the_ladder_stops_once_tiles_are_nearly_singular() {
 
 #[test]
 fn the_per_triangle_allowance_caps_automatic_parameters() {
-    // The allowance times the triangles lies between the estimates of rungs 1 and 2.
-    let model = Model::new(100_000);
-    let allowance = model.estimate(LADDER[1].0, LADDER[1].1).div_ceil(100_000);
-    assert!(allowance * 100_000 < model.estimate(LADDER[2].0, LADDER[2].1));
+    // The allowance times the triangles lies between the estimates of rungs 1 and 2, both above
+    // the floor.
+    let model = Model::with_costs(1_000_000, 8, 4096);
+    let allowance = model.estimate(LADDER[1].0, LADDER[1].1).div_ceil(1_000_000);
+    assert!(allowance * 1_000_000 < model.estimate(LADDER[2].0, LADDER[2].1));
+    assert!(model.estimate(LADDER[1].0, LADDER[1].1) > MIN_AUTOMATIC_BUDGET);
     let config = BakeConfig { max_bytes: u64::MAX / 2, max_bytes_per_triangle: allowance, ..BakeConfig::default() };
     let choice = choose(&model, &config).unwrap();
     assert_eq!((choice.params.lattice_n, choice.params.tiles), LADDER[1]);

@@ -368,7 +368,7 @@ def _options(options: dict) -> dict:
 
 def _shim_options(options: dict, triangles: int) -> dict:
     """The shims' bake options: the library's defaults (which give any mesh, however small, a
-    budget of at least 4 MiB), through the cache unless told otherwise. ``triangles`` is unused
+    budget of at least 16 MiB), through the cache unless told otherwise. ``triangles`` is unused
     and kept for the shims' calls."""
     del triangles
     out = dict(options)
