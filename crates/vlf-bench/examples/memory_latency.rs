@@ -13,6 +13,7 @@
 //! field does), so TLB misses cost what they cost a query.
 
 use std::time::Instant;
+use vlf_bake::generate::Rng;
 use vlf_format::AlignedBytes;
 
 /// Loads followed per timed pass.
@@ -38,15 +39,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 fn chase(bytes: u64) -> Result<f64, Box<dyn std::error::Error>> {
     let lines = (bytes / 64) as usize;
     let mut buffer = AlignedBytes::zeroed(bytes)?;
-    // A random cyclic order of the lines (Fisher–Yates with xorshift), each line holding the
-    // index of the next in its first eight bytes.
+    // A random cyclic order of the lines (Fisher–Yates with the scene generators' seeded
+    // generator), each line holding the index of the next in its first eight bytes.
     let mut order: Vec<u64> = (0..lines as u64).collect();
-    let mut state = 0x9E37_79B9_7F4A_7C15u64;
+    let mut rng = Rng::new(1);
     for i in (1..lines).rev() {
-        state ^= state << 13;
-        state ^= state >> 7;
-        state ^= state << 17;
-        order.swap(i, (state % (i as u64 + 1)) as usize);
+        order.swap(i, (rng.next_u64() % (i as u64 + 1)) as usize);
     }
     let words: &mut [u64] = bytemuck::cast_slice_mut(buffer.as_bytes_mut());
     for (i, &line) in order.iter().enumerate() {
