@@ -28,8 +28,11 @@ use vlf_geom::frame::frame;
 /// (`crate::params::DENSE_TILE_LOAD`). Revision 8 stores the triangles in Morton order of their
 /// centroids (`crate::order`, `formats/vlf.md` §5.7), so their ids change. Revision 9 raises the
 /// smallest budget of automatic parameters from 4 to 16 MiB (`crate::params::MIN_AUTOMATIC_BUDGET`):
-/// scenes of up to about 16,000 triangles may get more directions.
-pub const BAKER_REVISION: u32 = 9;
+/// scenes of up to about 16,000 triangles may get more directions. Revision 10 raises the cost of
+/// visiting a leaf to 4 on grids of 128² tiles and finer in fields of 33 directions or more
+/// (`vlf_raster::leaves::leaf_cost`, `formats/vlf.md` §6.3): their fields are smaller, and
+/// automatic parameters may reach more directions with them.
+pub const BAKER_REVISION: u32 = 10;
 
 /// The input hash of `formats/vlf.md` §3.2.
 pub fn input_hash(scene: &Scene, request: &Request) -> [u8; 32] {

@@ -6,7 +6,7 @@
 //! [`build_direction`] does all of it for every triangle of a scene (the bake); the parts are
 //! public so that a field's tiles can be rebuilt one at a time in memory (`vlf-scene`'s edits).
 
-use crate::leaves::{DepthPolicy, Slab, boundaries, ref_weight};
+use crate::leaves::{DepthPolicy, Slab, boundaries, leaf_cost, ref_weight};
 use crate::raster::{Part, rasterize};
 use vlf_format::block::{BOX_CELLS, MAX_LEAVES, Ref, block_words, write_block};
 use vlf_format::{EMPTY_TILE, StatisticsRecord, Z_LEVELS, size};
@@ -18,6 +18,9 @@ use vlf_geom::frame::mul;
 pub struct Grid {
     /// Tiles per side, `n`.
     pub tiles: u32,
+    /// The field's lattice size `N` (`2N² + 1` directions): with `tiles`, what visiting a leaf
+    /// costs the leaves' heuristic ([`crate::leaves::leaf_cost`]).
+    pub lattice_n: u32,
     /// The radius `R` of the bounding sphere the grid covers, around the field's centre.
     pub radius: f64,
     /// The conservative margin `μ` (`formats/vlf.md` §6.2), world units.
@@ -141,7 +144,7 @@ impl Grid {
         } else {
             (lo - 1, hi)
         };
-        boundaries(&s.slabs, lo, hi, &self.depth, &mut s.bounds);
+        boundaries(&s.slabs, lo, hi, &self.depth, leaf_cost(self.tiles, self.lattice_n), &mut s.bounds);
         let k = s.bounds.len() - 1;
         debug_assert!(k as u32 <= MAX_LEAVES);
         // Each ref goes to every leaf its closed range meets; entries are in id order, so each

@@ -7,7 +7,7 @@
 //! share of the tile's length) times what its refs cost. A split at `s` of a range `[a, b]` whose
 //! refs cost `W` costs `C + ((s − a)·W_a + (b − s)·W_b) / (b − a)` triangle tests, against `W`
 //! for a single leaf, where `W_a` and `W_b` sum the costs of the refs that meet each side (a ref
-//! straddling `s` is in both) and `C` ([`LEAF_COST`]) is what visiting one more leaf costs.
+//! straddling `s` is in both) and `C` ([`leaf_cost`]) is what visiting one more leaf costs.
 //!
 //! A ref costs a ray that reaches it its share of a sixteen-ref box test plus, if its box passes
 //! that test, one triangle test ([`ref_weight`]): a triangle whose box covers the whole tile is
@@ -41,14 +41,39 @@ impl Default for DepthPolicy {
     }
 }
 
-/// The cost of visiting a leaf, in triangle tests: a leaf visit finds the leaf, computes the
-/// ray's box over it and starts its box tests, and ends a ray's search only at its far side.
-/// [`RAY_CELLS`] was chosen with it by measuring bakes of the random 100K scene and the dragon
-/// (`docs/benchmarks/parameters.md`, "Leaves weighted by their boxes"); the cost itself was raised
-/// from 1.5 to 2.5 in baker revision 6 by a sweep over five scenes ("Leaf cost 2.5"): fields
-/// 3–21% smaller at the same parameters, rays as fast within noise (1M density inside rays 6%
-/// slower), which lets the 1M random scene of fixed size reach finer tiles within its budget.
+/// The cost of visiting a leaf, in triangle tests, on grids coarser than [`FINE_TILES`]: a leaf
+/// visit finds the leaf, computes the ray's box over it and starts its box tests, and ends a ray's
+/// search only at its far side. [`RAY_CELLS`] was chosen with it by measuring bakes of the random
+/// 100K scene and the dragon (`docs/benchmarks/parameters.md`, "Leaves weighted by their boxes");
+/// the cost itself was raised from 1.5 to 2.5 in baker revision 6 by a sweep over five scenes
+/// ("Leaf cost 2.5"): fields 3–21% smaller at the same parameters, rays as fast within noise (1M
+/// density inside rays 6% slower), which lets the 1M random scene of fixed size reach finer tiles
+/// within its budget.
 pub const LEAF_COST: f64 = 2.5;
+
+/// Grids of at least this many tiles per side, on lattices of at least [`FINE_LATTICE`]
+/// segments, take [`FINE_LEAF_COST`].
+pub const FINE_TILES: u32 = 128;
+
+/// The fewest lattice segments (`N = 4`: 33 directions) on which fine grids take
+/// [`FINE_LEAF_COST`].
+pub const FINE_LATTICE: u32 = 4;
+
+/// The cost of visiting a leaf on fine grids of many directions (baker revision 10). Measured
+/// (`docs/benchmarks/parameters.md`, "Leaf cost 4 on 128² tiles of many directions"): on the
+/// dragon's 128² tiles at 51 and 73 directions it makes fields 10% smaller with rays as fast or
+/// faster, and the dragon's 73 × 128² field then fits its 1 KiB per triangle. At 9 directions (the
+/// 1M random scene of fixed size, 128² tiles) the field was 18% smaller but its outside view
+/// 6–19% slower: a ray further from its direction widens its box over a longer leaf. On 64²
+/// tiles it saved 2–3% and cost the random scenes' rays up to 13%.
+pub const FINE_LEAF_COST: f64 = 4.0;
+
+/// The cost of visiting a leaf on a grid of `tiles` per side in a field of lattice size
+/// `lattice_n`: [`FINE_LEAF_COST`] from [`FINE_TILES`] tiles and [`FINE_LATTICE`] segments up,
+/// [`LEAF_COST`] otherwise.
+pub fn leaf_cost(tiles: u32, lattice_n: u32) -> f64 {
+    if tiles >= FINE_TILES && lattice_n >= FINE_LATTICE { FINE_LEAF_COST } else { LEAF_COST }
+}
 
 /// A ref's share of a sixteen-ref box test, in triangle tests.
 pub const BOX_TEST_COST: f64 = 0.03;
@@ -81,15 +106,17 @@ pub fn ref_weight(cells: [u8; 4]) -> f64 {
 /// (`lo < hi`): `lo`, the split points in increasing order, `hi`. Leaf `k` is the closed slab
 /// between boundaries `k` and `k + 1`; a ref belongs to every leaf it meets. Deterministic: the
 /// same refs in any order give the same boundaries.
-pub fn boundaries(refs: &[Slab], lo: u32, hi: u32, policy: &DepthPolicy, out: &mut Vec<u32>) {
+pub fn boundaries(refs: &[Slab], lo: u32, hi: u32, policy: &DepthPolicy, cost: f64, out: &mut Vec<u32>) {
     out.clear();
     out.push(lo);
-    let mut scratch = Scratch::default();
+    let mut scratch = Scratch { leaf_cost: cost, ..Scratch::default() };
     split(refs.to_vec(), lo, hi, 0, policy, out, &mut scratch);
 }
 
 #[derive(Default)]
 struct Scratch {
+    /// The cost of visiting a leaf, in triangle tests ([`leaf_cost`]).
+    leaf_cost: f64,
     /// The refs' starts and ends with their weights, each in increasing order.
     starts: Vec<(u32, f64)>,
     ends: Vec<(u32, f64)>,
@@ -151,7 +178,7 @@ fn best_split(refs: &[Slab], a: u32, b: u32, depth: u32, policy: &DepthPolicy, s
             ended += 1;
         }
         let right = total - gone;
-        let cost = LEAF_COST + ((at - a) as f64 * left + (b - at) as f64 * right) / length;
+        let cost = s.leaf_cost + ((at - a) as f64 * left + (b - at) as f64 * right) / length;
         if cost < best_cost {
             (best_cost, best) = (cost, Some(at));
         }
@@ -177,7 +204,7 @@ mod tests {
     fn leaves_boxed(refs: &[Range], cells: [u8; 4], lo: u32, hi: u32, p: DepthPolicy) -> Vec<u32> {
         let slabs: Vec<Slab> = refs.iter().map(|&z| Slab { z, weight: ref_weight(cells) }).collect();
         let mut out = Vec::new();
-        boundaries(&slabs, lo, hi, &p, &mut out);
+        boundaries(&slabs, lo, hi, &p, LEAF_COST, &mut out);
         out
     }
 
@@ -232,13 +259,13 @@ mod tests {
             })
             .collect();
         let mut a = Vec::new();
-        boundaries(&refs, 0, 9100, &policy(4, 10), &mut a);
+        boundaries(&refs, 0, 9100, &policy(4, 10), LEAF_COST, &mut a);
         assert!(a.len() > 2, "the refs are split: {a:?}");
         for round in 0..4 {
             refs.reverse();
             refs.rotate_left(round * 37);
             let mut b = Vec::new();
-            boundaries(&refs, 0, 9100, &policy(4, 10), &mut b);
+            boundaries(&refs, 0, 9100, &policy(4, 10), LEAF_COST, &mut b);
             assert_eq!(b, a);
         }
     }
@@ -273,5 +300,29 @@ mod tests {
         );
         let most = |b: &[u32]| members(b, &refs).into_iter().max().unwrap();
         assert!(most(&corner) > 2 * most(&whole), "{} vs {}", most(&corner), most(&whole));
+    }
+
+    #[test]
+    fn fine_grids_of_many_directions_pay_more_for_a_leaf_and_get_fewer_of_them() {
+        assert_eq!(leaf_cost(FINE_TILES - 1, 64), LEAF_COST);
+        assert_eq!(leaf_cost(FINE_TILES, FINE_LATTICE - 1), LEAF_COST);
+        assert_eq!(leaf_cost(FINE_TILES, FINE_LATTICE), FINE_LEAF_COST);
+        assert_eq!(leaf_cost(65536, 4096), FINE_LEAF_COST);
+        // Small boxes spread along z, as on a dense tile of a scanned surface: a dearer leaf
+        // splits them into fewer, longer leaves, and every ref is still in every leaf it meets.
+        let slabs: Vec<Slab> = (0..400u32)
+            .map(|i| Slab {
+                z: (i * 25, i * 25 + 30),
+                weight: ref_weight([(i % 200) as u8, (i % 200) as u8 + 20, 0, 20]),
+            })
+            .collect();
+        let (mut cheap, mut dear) = (Vec::new(), Vec::new());
+        boundaries(&slabs, 0, 10_030, &policy(1, 12), leaf_cost(64, 6), &mut cheap);
+        boundaries(&slabs, 0, 10_030, &policy(1, 12), leaf_cost(128, 6), &mut dear);
+        assert!(dear.len() < cheap.len(), "{} leaves at 128² tiles, {} at 64²", dear.len() - 1, cheap.len() - 1);
+        assert!(dear.len() > 2, "still split: {dear:?}");
+        let refs: Vec<Range> = slabs.iter().map(|s| s.z).collect();
+        let held: usize = members(&dear, &refs).iter().sum();
+        assert!(held >= refs.len(), "{held} memberships for {} refs", refs.len());
     }
 }

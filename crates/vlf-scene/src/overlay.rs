@@ -63,6 +63,7 @@ impl Sections {
         let p = base.parameters();
         let grid = Grid {
             tiles: p.tiles,
+            lattice_n: p.lattice_n,
             radius: reader.scene.radius,
             margin: p.margin,
             depth: vlf_raster::DepthPolicy { leaf_size: p.leaf_size, max_depth: p.max_depth },

@@ -150,7 +150,13 @@ pub struct Params {
 impl Params {
     /// The tile grid of a field of these parameters around a sphere of `radius`.
     pub fn grid(&self, radius: f64) -> vlf_raster::Grid {
-        vlf_raster::Grid { tiles: self.tiles, radius, margin: self.margin, depth: self.depth }
+        vlf_raster::Grid {
+            tiles: self.tiles,
+            lattice_n: self.lattice_n,
+            radius,
+            margin: self.margin,
+            depth: self.depth,
+        }
     }
 }
 
