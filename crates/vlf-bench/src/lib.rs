@@ -17,6 +17,8 @@
 //!
 //! - [`dynamic`]: dynamic scenes (issue 13): instances against Embree's two-level instancing,
 //!   per-frame transform updates, and the paper's delete and reinsert.
+//! - [`latency`]: what one dependent load to memory costs, which the peers benchmark records
+//!   before each ray set.
 //!
 //! Frames are traced on one thread (the paper used one processor); every timing is the median of
 //! `repeats` runs after a warm-up run. Bakes use all cores.
@@ -28,6 +30,7 @@ pub mod dynamic;
 pub mod experiments;
 #[allow(unsafe_code)]
 pub mod first_pixel;
+pub mod latency;
 pub mod peers;
 pub mod plot;
 

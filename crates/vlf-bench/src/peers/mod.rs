@@ -22,6 +22,7 @@ pub mod rays;
 pub mod report;
 pub mod scenes;
 
+use crate::latency;
 use crate::median;
 use anyhow::Context as _;
 use contestant::{Contestant, FieldBatch, FieldContestant, KdContestant, PeerHit};
@@ -189,6 +190,8 @@ pub fn run_scene(spec: &SceneSpec, cfg: &PeersConfig) -> anyhow::Result<SceneRes
         let checked =
             check::Checked::new(&stored, baked.center, set, &rays::sample(set.rays.len(), sample, SEED + k as u64));
         let checks: Vec<Counts> = all.iter().map(|c| checked.compare(*c, cfg.t_tolerance)).collect();
+        let memory_latency_ns = latency::chase(latency::PEERS_WORKING_SET)?;
+        note(cfg.verbose, format!("{} / {}: a miss to memory costs {memory_latency_ns:.1} ns", scene.name, set.name));
         let mut speeds = Vec::new();
         for (threads, pool) in &pools {
             for c in &all {
@@ -213,7 +216,15 @@ pub fn run_scene(spec: &SceneSpec, cfg: &PeersConfig) -> anyhow::Result<SceneRes
             Query::Closest => set.rays.par_iter().filter(|r| field.closest_hit(r).is_some()).count(),
             Query::Any => set.rays.par_iter().filter(|r| field.any_hit(r)).count(),
         };
-        results.push(SetResult { name: set.name.into(), query: set.query, rays: set.rays.len(), hits, speeds, checks });
+        results.push(SetResult {
+            name: set.name.into(),
+            query: set.query,
+            rays: set.rays.len(),
+            hits,
+            memory_latency_ns: Some(memory_latency_ns),
+            speeds,
+            checks,
+        });
     }
     drop(peers);
     drop(field);

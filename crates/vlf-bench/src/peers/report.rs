@@ -211,6 +211,19 @@ impl Report {
              timing's own is in `peers.json`. The whole run took {:.0} s.",
             self.date, self.machine, self.cores, self.load_before, self.load_after, self.total_seconds
         );
+        let misses: Vec<f64> =
+            self.scenes.iter().flat_map(|s| s.sets.iter().filter_map(|set| set.memory_latency_ns)).collect();
+        if let (Some(lo), Some(hi)) =
+            (misses.iter().copied().min_by(f64::total_cmp), misses.iter().copied().max_by(f64::total_cmp))
+        {
+            let _ = writeln!(
+                m,
+                "- **Memory**: a dependent load through 64 MiB (`vlf_bench::latency`, measured before each ray set) took \
+                 {lo:.0}–{hi:.0} ns over the run. On a virtual machine whose host shares its last-level cache this moves \
+                 from run to run, and the rays that wait on memory (incoherent ones, on fields larger than the cache) \
+                 move with it; each scene's figures are listed under its table."
+            );
+        }
         let _ = writeln!(
             m,
             "- **Contestants**: {}. The field is baked at its default automatic parameters (`BakeConfig::default()`) \
@@ -293,6 +306,18 @@ impl Report {
                     }
                 }
                 m.push('\n');
+            }
+            let misses: Vec<String> = s
+                .sets
+                .iter()
+                .filter_map(|set| set.memory_latency_ns.map(|ns| format!("{} {ns:.0} ns", set.name)))
+                .collect();
+            if !misses.is_empty() {
+                let _ = writeln!(
+                    m,
+                    "\nA miss to memory (a 64 MiB pointer chase, `vlf_bench::latency`) just before each set was timed: {}.",
+                    misses.join(", ")
+                );
             }
             m.push('\n');
         }
