@@ -21,10 +21,14 @@ use vlf_geom::{Baseline, Closest, Hit, Ray, TriRay};
 /// measured) with the steps of the others, few enough that their state stays in L1.
 const IN_FLIGHT: usize = 8;
 
-/// Fields whose tile blocks and triangles take fewer bytes than this mostly stay in the cache
-/// (this machine class has 1 MiB of L2 per core and a shared L3): interleaving their rays would
-/// only add its bookkeeping.
-const CACHED_BYTES: usize = 8 << 20;
+/// Fields whose tile blocks and triangles take fewer bytes than this mostly stay in the cache:
+/// interleaving their rays only adds its bookkeeping. Measured (`examples/batch_choice.rs` on
+/// 262,144 incoherent rays, `docs/benchmarks/where-the-time-goes.md`, 2026-12-06): fields of 12 to 58 MB
+/// traced them 9–42% slower interleaved than in turn, an 88 MB field as fast (and 1.12× faster in
+/// a run whose misses cost more); in the peers benchmark the bunny's and the 10K scenes' fields
+/// (12–16 MB, since the 16 MiB floor of automatic budgets) traced them 26–29% slower interleaved.
+/// It was 8 MiB while automatic fields of small scenes were smaller than that.
+const CACHED_BYTES: usize = 32 << 20;
 
 /// Rays a batch judges at a time: traced in turn if they are coherent, else interleaved.
 const WINDOW: usize = 256;
