@@ -12,9 +12,9 @@ use vlf_format::AlignedBytes;
 /// Loads followed per timed pass.
 const LOADS: usize = 2_000_000;
 
-/// The working set the peers benchmark chases before each ray set: 64 MiB, about the size of the
+/// The working set the peers benchmark chases before each ray set, in MiB: about the size of the
 /// random 100K scenes' fields.
-pub const PEERS_WORKING_SET: u64 = 64 << 20;
+pub const PEERS_WORKING_SET_MIB: u64 = 64;
 
 /// The median nanoseconds per load, over five passes of two million loads, of a random cycle
 /// through the 64-byte lines of a buffer of `bytes` bytes (at least one line). The buffer is
@@ -50,8 +50,7 @@ pub fn chase(bytes: u64) -> anyhow::Result<f64> {
         times.push(start.elapsed().as_secs_f64() * 1e9 / LOADS as f64);
     }
     std::hint::black_box(at);
-    times.sort_by(f64::total_cmp);
-    Ok(times[times.len() / 2])
+    Ok(crate::median(&mut times))
 }
 
 #[cfg(test)]

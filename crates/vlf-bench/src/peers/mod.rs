@@ -190,7 +190,7 @@ pub fn run_scene(spec: &SceneSpec, cfg: &PeersConfig) -> anyhow::Result<SceneRes
         let checked =
             check::Checked::new(&stored, baked.center, set, &rays::sample(set.rays.len(), sample, SEED + k as u64));
         let checks: Vec<Counts> = all.iter().map(|c| checked.compare(*c, cfg.t_tolerance)).collect();
-        let memory_latency_ns = latency::chase(latency::PEERS_WORKING_SET)?;
+        let memory_latency_ns = latency::chase(latency::PEERS_WORKING_SET_MIB << 20)?;
         note(cfg.verbose, format!("{} / {}: a miss to memory costs {memory_latency_ns:.1} ns", scene.name, set.name));
         let mut speeds = Vec::new();
         for (threads, pool) in &pools {

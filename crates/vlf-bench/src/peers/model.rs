@@ -68,9 +68,9 @@ pub struct SetResult {
     pub rays: usize,
     /// The rays hit (closest) or blocked (any), by the field.
     pub hits: usize,
-    /// Nanoseconds per dependent load of a 64 MiB pointer chase (`crate::latency`), measured
-    /// just before the set was timed: what a miss cost the machine then. `None` in reports
-    /// written before it was recorded.
+    /// Nanoseconds per dependent load of a pointer chase through
+    /// `crate::latency::PEERS_WORKING_SET_MIB` MiB, measured just before the set was timed: what a
+    /// miss cost the machine then. `None` in reports written before it was recorded.
     #[serde(default)]
     pub memory_latency_ns: Option<f64>,
     pub speeds: Vec<Speed>,

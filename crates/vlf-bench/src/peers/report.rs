@@ -3,6 +3,7 @@
 
 use super::model::{KdChoice, PeersConfig, SceneResult, SetResult, load_average};
 use super::rays::{LIGHT_OFFSET, SHADOW_T};
+use crate::latency::PEERS_WORKING_SET_MIB;
 use crate::plot::{Series, bar_chart, line_chart_with_references};
 use crate::write_output;
 use std::fmt::Write as _;
@@ -218,8 +219,8 @@ impl Report {
         {
             let _ = writeln!(
                 m,
-                "- **Memory**: a dependent load through 64 MiB (`vlf_bench::latency`, measured before each ray set) took \
-                 {lo:.0}–{hi:.0} ns over the run. On a virtual machine whose host shares its last-level cache this moves \
+                "- **Memory**: a dependent load through {PEERS_WORKING_SET_MIB} MiB (`vlf_bench::latency`, measured before \
+                 each ray set) took {lo:.0}–{hi:.0} ns over the run. On a virtual machine whose host shares its last-level cache this moves \
                  from run to run, and the rays that wait on memory (incoherent ones, on fields larger than the cache) \
                  move with it; each scene's figures are listed under its table."
             );
@@ -315,7 +316,8 @@ impl Report {
             if !misses.is_empty() {
                 let _ = writeln!(
                     m,
-                    "\nA miss to memory (a 64 MiB pointer chase, `vlf_bench::latency`) just before each set was timed: {}.",
+                    "\nA miss to memory (a {PEERS_WORKING_SET_MIB} MiB pointer chase, `vlf_bench::latency`) just before each set \
+                     was timed: {}.",
                     misses.join(", ")
                 );
             }
