@@ -23,11 +23,11 @@ const IN_FLIGHT: usize = 8;
 
 /// Fields whose tile blocks and triangles take fewer bytes than this mostly stay in the cache:
 /// interleaving their rays only adds its bookkeeping. Measured (`examples/batch_choice.rs` on
-/// 262,144 incoherent rays, `docs/benchmarks/where-the-time-goes.md`, 2026-12-06): fields of 12 to 58 MB
-/// traced them 9–42% slower interleaved than in turn, an 88 MB field as fast (and 1.12× faster in
-/// a run whose misses cost more); in the peers benchmark the bunny's and the 10K scenes' fields
-/// (12–16 MB, since the 16 MiB floor of automatic budgets) traced them 26–29% slower interleaved.
-/// It was 8 MiB while automatic fields of small scenes were smaller than that.
+/// 262,144 incoherent rays; `docs/benchmarks/where-the-time-goes.md`, 2026-12-06): on an Intel
+/// Xeon VM fields of 12 to 58 MB traced them 9–42% slower interleaved than in turn, an 88 MB field
+/// as fast (1.12× faster in a run whose misses cost more); on an AMD EPYC VM the bunny's (13 MB)
+/// and a 10K scene's (16 MB) 30–35% slower, the 100K scenes' (84–95 MiB) 12–15% faster. It was
+/// 8 MiB while automatic fields of small scenes were smaller than that.
 const CACHED_BYTES: usize = 32 << 20;
 
 /// Rays a batch judges at a time: traced in turn if they are coherent, else interleaved.
