@@ -137,6 +137,20 @@ pub struct Block<'a> {
 }
 
 impl<'a> Block<'a> {
+    /// The first and last leaf boundaries of the block that starts at `words[0]` (the tile's z
+    /// range), read without parsing the rest of its header: `None` where [`Block::parse`] would
+    /// find no leaf or more than [`MAX_LEAVES`], or the boundaries past `words`.
+    #[inline(always)]
+    pub fn z_range(words: &'a [u64]) -> Option<[u16; 2]> {
+        let first = *words.first()?;
+        let k = first as u32;
+        if k == 0 || k > MAX_LEAVES {
+            return None;
+        }
+        let halves: &[u16] = bytemuck::cast_slice(words);
+        Some([(first >> 32) as u16, *halves.get(2 + k as usize)?])
+    }
+
     /// Parses the block that starts at `words[0]`, or `None` if its header claims no leaf, more
     /// than [`MAX_LEAVES`], or more bytes than `words` holds.
     #[inline]
@@ -336,5 +350,32 @@ mod tests {
         bad[1] = (bad[1] & !0xffff_ffff) | 1000;
         assert!(Block::parse(&bad).is_none());
         assert!(Block::parse(&words[..0]).is_none());
+        // The z range is read from the same header words, and refused where `parse` refuses K.
+        assert_eq!(Block::z_range(&words), Some([0, 1]));
+        let mut bad = words.clone();
+        bad[0] = (bad[0] & !0xffff_ffff) | (MAX_LEAVES as u64 + 1);
+        assert_eq!(Block::z_range(&bad), None);
+        bad[0] &= !0xffff_ffff;
+        assert_eq!(Block::z_range(&bad), None, "no leaf");
+        assert_eq!(Block::z_range(&words[..0]), None);
+    }
+
+    /// [`Block::z_range`] is the first and last of [`Block::bounds`] for every leaf count (the
+    /// last boundary moves through the header's words as K grows), and `None` when the words end
+    /// before the last boundary.
+    #[test]
+    fn the_z_range_is_the_first_and_last_boundary() {
+        for k in 1..=40usize {
+            let bounds: Vec<u16> = (0..=k).map(|i| (7 + 31 * i) as u16).collect();
+            let leaves: Vec<&[Ref]> = (0..k).map(|_| &[][..]).collect();
+            let mut words = vec![];
+            write_block(&bounds, &leaves, &mut words);
+            let b = Block::parse(&words).unwrap();
+            assert_eq!(Block::z_range(&words), Some([b.bounds()[0], b.bounds()[k]]), "K = {k}");
+            // The last boundary is half-word 2 + K: in word (2 + K) / 4.
+            let needed = (2 + k) / 4 + 1;
+            assert_eq!(Block::z_range(&words[..needed]), Some([bounds[0], bounds[k]]), "K = {k}");
+            assert_eq!(Block::z_range(&words[..needed - 1]), None, "K = {k}");
+        }
     }
 }

@@ -17,3 +17,25 @@ pub(crate) fn prefetch<T: ?Sized>(value: &T) {
     #[cfg(not(target_arch = "x86_64"))]
     let _ = value;
 }
+
+/// Starts loading `lines` cache lines `step` bytes apart from the one that holds `first` (a
+/// negative `step` walks back). The addresses past the first need not lie in any object: a
+/// prefetch of an address that is not mapped is dropped, never faults, so no bounds are checked.
+#[inline(always)]
+pub(crate) fn prefetch_lines<T>(first: &T, lines: usize, step: isize) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        let base = (first as *const T).cast::<i8>();
+        for i in 0..lines {
+            // SAFETY: as in `prefetch`; `wrapping_offset` computes the address without claiming
+            // that it points into `first`, and the prefetch neither reads it into the program
+            // nor faults on it.
+            unsafe {
+                use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+                _mm_prefetch::<_MM_HINT_T0>(base.wrapping_offset(step * i as isize));
+            }
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = (first, lines, step);
+}

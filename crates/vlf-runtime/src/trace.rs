@@ -25,7 +25,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use crate::filter::{Limits, pass_mask, segment_limits};
-use crate::prefetch::prefetch;
+use crate::prefetch::{prefetch, prefetch_lines};
 use crate::walk::{Grid, Setup, entry_leaf, higher, lower};
 use vlf_format::block::{Block, header_bytes};
 use vlf_format::{EMPTY_TILE, FieldReader};
@@ -127,10 +127,8 @@ const BLOCK_LINES: usize = 4;
 /// Starts loading the first [`BLOCK_LINES`] cache lines of the block that starts at `words[0]`.
 #[inline(always)]
 fn prefetch_block(words: &[u64]) {
-    for i in 0..BLOCK_LINES {
-        if let Some(w) = words.get(8 * i) {
-            prefetch(w);
-        }
+    if let Some(w) = words.first() {
+        prefetch_lines(w, BLOCK_LINES, 64);
     }
 }
 
@@ -184,45 +182,54 @@ pub(crate) fn trace<'t, C: Counter, S: Search<'t>>(
     let (dcx, dcy) = (s.d[0] * cpu, s.d[1] * cpu);
     let tris = search.tris();
     let mut origin: Option<OriginLeaf<'_>> = None;
+    // The current tile's TILES entry: the first tile's read here (and its block started, as no
+    // tile before it did), each next one's carried over from the look-ahead of the tile before.
+    let mut entry = tiles.get(iy as usize * n + ix as usize).copied().unwrap_or(EMPTY_TILE);
+    if entry != EMPTY_TILE
+        && let Some(words) = reader.leaves.get(lbase.wrapping_add(entry as usize)..)
+    {
+        prefetch_block(words);
+    }
     let over = 'walk: {
         while visits > 0 {
             visits -= 1;
             counter.cell();
             let t_exit = lower(lower(next_x, next_y), s.t1);
             let more = t_exit < s.t1;
-            let (nx, ny) = if next_x <= next_y { (ix + step_x, iy) } else { (ix, iy + step_y) };
+            // Which axis the ray crosses next: one comparison, for the look-ahead and the step.
+            let x_first = next_x <= next_y;
+            let (nx, ny) = if x_first { (ix + step_x, iy) } else { (ix, iy + step_y) };
             let ahead = more && (0..ni).contains(&nx) && (0..ni).contains(&ny);
+            let next_entry = if ahead {
+                tiles.get(ny as usize * n + nx as usize).copied().unwrap_or(EMPTY_TILE)
+            } else {
+                EMPTY_TILE
+            };
             // Start loading the block of the tile after this one, while this one is visited.
-            if ahead
-                && let Some(&e) = tiles.get(ny as usize * n + nx as usize)
-                && e != EMPTY_TILE
-                && let Some(words) = reader.leaves.get(lbase.wrapping_add(e as usize)..)
-            {
-                prefetch_block(words);
-            }
-            let entry = tiles.get(iy as usize * n + ix as usize).copied().unwrap_or(EMPTY_TILE);
-            // The first tile's block was not started by a tile before it.
-            if t_enter == s.t0
-                && entry != EMPTY_TILE
-                && let Some(words) = reader.leaves.get(lbase.wrapping_add(entry as usize)..)
+            if next_entry != EMPTY_TILE
+                && let Some(words) = reader.leaves.get(lbase.wrapping_add(next_entry as usize)..)
             {
                 prefetch_block(words);
             }
             if entry != EMPTY_TILE
                 && let Some(words) = reader.leaves.get(lbase.wrapping_add(entry as usize)..)
+                && let Some([z0, z1]) = Block::z_range(words)
+                && let (ta, tb) = if s.up { (s.t_at(z0), s.t_at(z1)) } else { (s.t_at(z1), s.t_at(z0)) }
+                && let (lo, hi) = (higher(t_enter, ta), lower(t_exit, tb))
+                && lo <= hi
                 && let Some(block) = Block::parse(words)
             {
                 let corner = [-r + ix as f64 * w, -r + iy as f64 * w];
                 let ray =
                     CellRay { o: [(s.o[0] - corner[0]) * cpu, (s.o[1] - corner[1]) * cpu], d: [dcx, dcy], margin };
-                if visit_tile(&block, s, &ray, t_enter, t_exit, tris, search, counter, &mut origin) {
+                if visit_tile(&block, s, &ray, lo, hi, tris, search, counter, &mut origin) {
                     break 'walk true;
                 }
             }
             if !ahead {
                 break 'walk false;
             }
-            if next_x <= next_y {
+            if x_first {
                 t_enter = next_x;
                 next_x += delta_x;
             } else {
@@ -230,6 +237,7 @@ pub(crate) fn trace<'t, C: Counter, S: Search<'t>>(
                 next_y += delta_y;
             }
             (ix, iy) = (nx, ny);
+            entry = next_entry;
         }
         false
     };
@@ -276,16 +284,18 @@ impl CellRay {
     }
 }
 
-/// Visits the leaves of `block` that the ray `s` passes through over `[t_enter, t_exit]`, front to
-/// back; returns whether the search is over.
+/// Visits the leaves of `block` that the ray `s` passes through over `[lo, hi]` (the part of its
+/// range over the tile that lies within the tile's z range, not empty: the caller checked it
+/// with [`Block::z_range`] before parsing the block), front to back; returns whether the search
+/// is over.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn visit_tile<'t, 'r, C: Counter, S: Search<'t>>(
     block: &Block<'r>,
     s: &Setup,
     ray: &CellRay,
-    t_enter: f64,
-    t_exit: f64,
+    lo: f64,
+    hi: f64,
     tris: &'t S::Tris,
     search: &mut S,
     counter: &mut C,
@@ -295,13 +305,6 @@ fn visit_tile<'t, 'r, C: Counter, S: Search<'t>>(
     let ends = block.ends();
     let k = block.leaf_count();
     let m = block.ref_count();
-    // The parameter range over which the ray is within the tile's z range.
-    let (ta, tb) = if s.up { (s.t_at(bounds[0]), s.t_at(bounds[k])) } else { (s.t_at(bounds[k]), s.t_at(bounds[0])) };
-    let lo = higher(t_enter, ta);
-    let hi = lower(t_exit, tb);
-    if !(lo <= hi) {
-        return false;
-    }
     // The leaf holding the entry point; then the next one along the ray, until it leaves.
     let mut leaf = entry_leaf(&bounds[1..k], s.oq + lo * s.dq, s.up);
     let mut enter = lo;
@@ -314,11 +317,9 @@ fn visit_tile<'t, 'r, C: Counter, S: Search<'t>>(
         let bytes = block.bytes();
         let start = hdr + 8 * if leaf == 0 { 0 } else { ends[leaf - 1] as usize };
         let end = hdr + 8 * ends[leaf] as usize;
-        for i in 0..lines {
-            let at = if s.up { start + 64 * i } else { end.wrapping_sub(64 * i + 1) };
-            if let Some(b) = bytes.get(at) {
-                prefetch(b);
-            }
+        let (at, step) = if s.up { (start, 64) } else { (end.wrapping_sub(1), -64) };
+        if let Some(b) = bytes.get(at) {
+            prefetch_lines(b, lines, step);
         }
     }
     loop {
