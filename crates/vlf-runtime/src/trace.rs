@@ -26,7 +26,7 @@
 
 use crate::filter::{Limits, pass_mask, segment_limits};
 use crate::prefetch::{prefetch, prefetch_lines};
-use crate::walk::{Grid, Setup, entry_leaf, higher, lower};
+use crate::walk::{Grid, Setup, entry_leaf, lower, z_overlap};
 use vlf_format::block::{Block, header_bytes};
 use vlf_format::{EMPTY_TILE, FieldReader};
 use vlf_geom::kernel::FILLER;
@@ -213,10 +213,8 @@ pub(crate) fn trace<'t, C: Counter, S: Search<'t>>(
             }
             if entry != EMPTY_TILE
                 && let Some(words) = reader.leaves.get(lbase.wrapping_add(entry as usize)..)
-                && let Some([z0, z1]) = Block::z_range(words)
-                && let (ta, tb) = if s.up { (s.t_at(z0), s.t_at(z1)) } else { (s.t_at(z1), s.t_at(z0)) }
-                && let (lo, hi) = (higher(t_enter, ta), lower(t_exit, tb))
-                && lo <= hi
+                && let Some(z) = Block::z_range(words)
+                && let Some((lo, hi)) = z_overlap(s, z, t_enter, t_exit)
                 && let Some(block) = Block::parse(words)
             {
                 let corner = [-r + ix as f64 * w, -r + iy as f64 * w];
@@ -286,8 +284,8 @@ impl CellRay {
 
 /// Visits the leaves of `block` that the ray `s` passes through over `[lo, hi]` (the part of its
 /// range over the tile that lies within the tile's z range, not empty: the caller checked it
-/// with [`Block::z_range`] before parsing the block), front to back; returns whether the search
-/// is over.
+/// with [`z_overlap`] before parsing the block), front to back; returns whether the search is
+/// over.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn visit_tile<'t, 'r, C: Counter, S: Search<'t>>(

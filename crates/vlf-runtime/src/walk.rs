@@ -221,21 +221,24 @@ struct Tile<'a> {
     hi: f64,
 }
 
+/// The part `[lo, hi]` of the ray's parameter range `[t_enter, t_exit]` over a tile in which it
+/// is within the tile's z range `[z0, z1]` (quantized levels, [`Block::z_range`]), or `None` if
+/// the ray misses it: tested before the tile's block is parsed, as most tiles a primary ray
+/// crosses are passed in front of or behind.
+#[inline(always)]
+pub(crate) fn z_overlap(s: &Setup, [z0, z1]: [u16; 2], t_enter: f64, t_exit: f64) -> Option<(f64, f64)> {
+    let (ta, tb) = if s.up { (s.t_at(z0), s.t_at(z1)) } else { (s.t_at(z1), s.t_at(z0)) };
+    let (lo, hi) = (higher(t_enter, ta), lower(t_exit, tb));
+    (lo <= hi).then_some((lo, hi))
+}
+
 impl<'a> Tile<'a> {
-    /// The leaves of `block` (the tile at `corner`) that the ray's parameter range
-    /// `[t_enter, t_exit]` reaches, or `None` if it misses the tile's z range.
+    /// The leaves of `block` (the tile at `corner`) that the ray reaches over `[lo, hi]`, the part
+    /// of its range over the tile that lies within the tile's z range ([`z_overlap`]).
     #[inline(always)]
-    fn new(block: Block<'a>, corner: [f64; 2], g: &Grid, s: &Setup, t_enter: f64, t_exit: f64) -> Option<Self> {
+    fn new(block: Block<'a>, corner: [f64; 2], g: &Grid, s: &Setup, lo: f64, hi: f64) -> Self {
         let bounds = block.bounds();
         let k = block.leaf_count();
-        // The parameter range over which the ray is within the tile's z range.
-        let (ta, tb) =
-            if s.up { (s.t_at(bounds[0]), s.t_at(bounds[k])) } else { (s.t_at(bounds[k]), s.t_at(bounds[0])) };
-        let lo = higher(t_enter, ta);
-        let hi = lower(t_exit, tb);
-        if !(lo <= hi) {
-            return None;
-        }
         // The leaf holding the entry point: the leaves partition [bounds[0], bounds[K]] in order.
         // Going up, the first leaf whose top is not below it; going down, the last whose bottom
         // is not above it.
@@ -246,7 +249,7 @@ impl<'a> Tile<'a> {
             d: [s.d[0] * c, s.d[1] * c],
             margin: g.margin * c,
         };
-        Some(Tile { block, ray, leaf, leaf_enter: lo, hi })
+        Tile { block, ray, leaf, leaf_enter: lo, hi }
     }
 
     /// The next leaf with refs, front to back, or `None` when the ray has left the tile's leaves.
@@ -478,8 +481,9 @@ impl<'a> Beam<'a> {
     /// `dda`, or `None` if the block does not parse or the ray misses its z range.
     #[inline(always)]
     fn tile(&self, at: usize, g: &Grid, s: &Setup, dda: &Dda) -> Option<Tile<'a>> {
-        let block = Block::parse(self.leaves.get(at..)?)?;
-        Tile::new(block, dda.corner(g), g, s, dda.t_enter, dda.t_exit)
+        let words = self.leaves.get(at..)?;
+        let (lo, hi) = z_overlap(s, Block::z_range(words)?, dda.t_enter, dda.t_exit)?;
+        Some(Tile::new(Block::parse(words)?, dda.corner(g), g, s, lo, hi))
     }
 }
 
