@@ -6,36 +6,32 @@
 /// Only a hint: it changes no value and never faults.
 #[inline(always)]
 pub(crate) fn prefetch<T: ?Sized>(value: &T) {
-    #[cfg(target_arch = "x86_64")]
-    // SAFETY: `_mm_prefetch` needs SSE, which every x86-64 CPU has (the target's baseline). A
-    // prefetch never faults and reads nothing into the program, and the address comes from a
-    // reference, so it is valid anyway.
-    unsafe {
-        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
-        _mm_prefetch::<_MM_HINT_T0>((value as *const T).cast());
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = value;
+    prefetch_address((value as *const T).cast());
 }
 
 /// Starts loading `lines` cache lines `step` bytes apart from the one that holds `first` (a
-/// negative `step` walks back). The addresses past the first need not lie in any object: a
-/// prefetch of an address that is not mapped is dropped, never faults, so no bounds are checked.
+/// negative `step` walks back). The addresses past the first need not lie in any object (see
+/// [`prefetch_address`]), so none is checked against a bound.
 #[inline(always)]
 pub(crate) fn prefetch_lines<T>(first: &T, lines: usize, step: isize) {
+    let base = (first as *const T).cast::<i8>();
+    for i in 0..lines {
+        // `wrapping_offset`: the address is computed, never dereferenced.
+        prefetch_address(base.wrapping_offset(step * i as isize));
+    }
+}
+
+/// The prefetch instruction on `address`, whatever it points to.
+#[inline(always)]
+fn prefetch_address(address: *const i8) {
     #[cfg(target_arch = "x86_64")]
-    {
-        let base = (first as *const T).cast::<i8>();
-        for i in 0..lines {
-            // SAFETY: as in `prefetch`; `wrapping_offset` computes the address without claiming
-            // that it points into `first`, and the prefetch neither reads it into the program
-            // nor faults on it.
-            unsafe {
-                use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
-                _mm_prefetch::<_MM_HINT_T0>(base.wrapping_offset(step * i as isize));
-            }
-        }
+    // SAFETY: `_mm_prefetch` needs SSE, which every x86-64 CPU has (the target's baseline). A
+    // prefetch reads nothing into the program and never faults, whatever the address: one that
+    // is not mapped, or not the program's, is dropped. So any pointer will do, in bounds or not.
+    unsafe {
+        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+        _mm_prefetch::<_MM_HINT_T0>(address);
     }
     #[cfg(not(target_arch = "x86_64"))]
-    let _ = (first, lines, step);
+    let _ = address;
 }
