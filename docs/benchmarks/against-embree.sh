@@ -6,11 +6,11 @@
 #   bash docs/benchmarks/against-embree.sh SCENE
 #
 # Reads target/single-ray/SCENE.vlf and its ray sets (make them first with
-# `bash docs/benchmarks/single-ray-sets.sh SCENE MESH`). Splits the whole outside view by what
-# each ray does: misses the scene's box ("away"), enters the box and misses the scene ("box
-# miss"), or hits ("hit"); adds a warm set of each of the last two (300 rays of the class, 100
-# times over: every line they touch stays cached), the inside view's middle rows, and the
-# incoherent rays, cold and warm. For each set it prints, for the field and for Embree 3
+# `bash docs/benchmarks/single-ray-sets.sh SCENE MESH`): the whole outside view split by what
+# each ray does (misses the scene's box, "away"; enters the box and misses the scene, "box
+# miss"; hits, "hit"), warm sets of the last two (300 rays of the class, 100 times over: every
+# line they touch stays cached), the inside view's middle rows, and the incoherent rays, cold
+# and warm. For each set it prints, for the field and for Embree 3
 # (`rtcIntersect1`, built over the field's own triangles):
 #   - ns per ray: `vs_embree`, the two in turn, median of 7 rounds, on one core (`taskset -c 1`);
 #   - instructions per ray: one round under callgrind, counting only inside each contestant's
@@ -25,61 +25,17 @@ exec < <(:)
 [ $# -eq 1 ] || { sed -n 2,21p "$0" >&2; exit 2; }
 s=$1
 W=target/single-ray
-for f in "$s.vlf" "$s-outside-all.bin" "$s-inside.bin" "$s-incoherent.bin" "$s-incoherent-warm.bin"; do
+for f in "$s.vlf" "$s-outside-hit.bin" "$s-inside.bin" "$s-incoherent.bin" "$s-incoherent-warm.bin"; do
   [ -f "$W/$f" ] || { echo "no $W/$f: run docs/benchmarks/single-ray-sets.sh $s MESH first" >&2; exit 1; }
 done
 if [ ! -f /usr/include/embree3/rtcore.h ] || ! command -v valgrind >/dev/null; then
   apt-get update -qq
   DEBIAN_FRONTEND=noninteractive apt-get install -y -qq libembree-dev valgrind
 fi
-cargo build --release -q --bin vlf-bake
 cargo build --release -q -p vlf-bench --features embree --example vs_embree
-B=target/release/vlf-bake
 V=target/release/examples/vs_embree
 PIN=()
 command -v taskset >/dev/null && PIN=(taskset -c 1)
-
-$B trace "$W/$s.vlf" --rays "$W/$s-outside-all.bin" -o "$W/$s-outside-all-hits.bin" -q
-$B dump "$W/$s.vlf" --json > "$W/$s.json"
-python3 - "$W" "$s" <<'PY'
-import json, struct, sys
-w, s = sys.argv[1], sys.argv[2]
-info = json.load(open(f"{w}/{s}.json"))
-c, m = info["center"], info["margin"]
-lo = [c[k] + info["aabb_min"][k] - m for k in range(3)]
-hi = [c[k] + info["aabb_max"][k] + m for k in range(3)]
-rays = open(f"{w}/{s}-outside-all.bin", "rb").read()
-hits = open(f"{w}/{s}-outside-all-hits.bin", "rb").read()
-assert len(hits) == 16 * (len(rays) // 32), "one 16-byte hit record per ray (formats/rays.md)"
-
-def enters_box(r):
-    t0, t1 = r[3], r[7]
-    for k in range(3):
-        o, d = r[k], r[4 + k]
-        if d == 0.0:
-            if not lo[k] <= o <= hi[k]:
-                return False
-            continue
-        ta, tb = (lo[k] - o) / d, (hi[k] - o) / d
-        t0, t1 = max(t0, min(ta, tb)), min(t1, max(ta, tb))
-    return t0 <= t1
-
-classes = {"away": [], "box-miss": [], "hit": []}
-for i in range(len(rays) // 32):
-    record = rays[32 * i : 32 * i + 32]
-    t = struct.unpack_from("<f", hits, 16 * i)[0]
-    if t != float("inf"):
-        classes["hit"].append(record)
-    elif enters_box(struct.unpack("<8f", record)):
-        classes["box-miss"].append(record)
-    else:
-        classes["away"].append(record)
-for name, records in classes.items():
-    open(f"{w}/{s}-outside-{name}.bin", "wb").write(b"".join(records))
-    if name != "away" and records:
-        middle = len(records) // 2
-        open(f"{w}/{s}-outside-{name}-warm.bin", "wb").write(b"".join(records[middle : middle + 300]) * 100)
-PY
 
 echo "| $s rays | count | field ns | Embree ns | field / Embree | field instructions | Embree instructions |"
 echo "| --- | ---: | ---: | ---: | ---: | ---: | ---: |"

@@ -9,7 +9,9 @@
 # views, `vlf-bake rays`) and their middle 64 rows (SCENE-outside.bin, SCENE-inside.bin); 20,000
 # incoherent rays (origins in the scene's box, random directions, seed 1); and shadow rays (any
 # hit) from every eighth inside hit towards the peers' light, `centre + (0.3, 3, 0.2)·R`; and
-# ambient-occlusion (`-ao-shadow`) and bounce rays from every fourth inside hit. Two warm sets,
+# ambient-occlusion (`-ao-shadow`) and bounce rays from every fourth inside hit; and the whole
+# outside view split by what each ray does (SCENE-outside-away/-box-miss/-hit.bin, with warm sets
+# of the last two), which `against-embree.sh` reads. Two warm sets,
 # whose field lines stay cached from one pass to the next, tell a query's work from its waiting
 # on memory: SCENE-incoherent-warm.bin (the first 500 incoherent rays, 40 times) and
 # SCENE-outside-warm.bin (the outside view's middle row, 512 rays, 40 times). For the
@@ -31,7 +33,9 @@ $B bake "$W/$s.obj" -o "$W/$s.vlf" -q
 for view in outside inside; do
   $B rays "$W/$s.vlf" --view $view --width 512 --height 512 -o "$W/$s-$view-all.bin" -q
 done
-$B trace "$W/$s.vlf" --rays "$W/$s-inside-all.bin" -o "$W/$s-inside-hits.bin" -q
+for view in outside inside; do
+  $B trace "$W/$s.vlf" --rays "$W/$s-$view-all.bin" -o "$W/$s-$view-hits.bin" -q
+done
 $B dump "$W/$s.vlf" --json > "$W/$s.json"
 python3 - "$W" "$s" <<'PY'
 import json, math, random, struct, sys
@@ -92,4 +96,39 @@ for ray, p in inside_hits(4):
     bounce.append(struct.pack("<8f", *p, 1e-4 * r, *d, float("inf")))
 open(f"{w}/{s}-ao-shadow.bin", "wb").write(b"".join(ao))
 open(f"{w}/{s}-bounce.bin", "wb").write(b"".join(bounce))
+# The whole outside view by what each ray does, for `against-embree.sh`: misses the scene's box
+# grown by the margin ("away"), enters it and misses the scene ("box-miss"), or hits ("hit");
+# and a warm set of each of the last two (300 rays from the middle of the class, 100 times over).
+m = info["margin"]
+view = open(f"{w}/{s}-outside-all.bin", "rb").read()
+view_hits = open(f"{w}/{s}-outside-hits.bin", "rb").read()
+
+
+def enters_box(r):
+    t0, t1 = r[3], r[7]
+    for k in range(3):
+        o, d = r[k], r[4 + k]
+        if d == 0.0:
+            if not lo[k] - m <= o <= hi[k] + m:
+                return False
+            continue
+        ta, tb = (lo[k] - m - o) / d, (hi[k] + m - o) / d
+        t0, t1 = max(t0, min(ta, tb)), min(t1, max(ta, tb))
+    return t0 <= t1
+
+
+classes = {"away": [], "box-miss": [], "hit": []}
+for i in range(len(view) // 32):
+    record = view[32 * i : 32 * i + 32]
+    if not math.isinf(struct.unpack_from("<f", view_hits, 16 * i)[0]):
+        classes["hit"].append(record)
+    elif enters_box(struct.unpack("<8f", record)):
+        classes["box-miss"].append(record)
+    else:
+        classes["away"].append(record)
+for name, records in classes.items():
+    open(f"{w}/{s}-outside-{name}.bin", "wb").write(b"".join(records))
+    if name != "away" and records:
+        middle = len(records) // 2
+        open(f"{w}/{s}-outside-{name}-warm.bin", "wb").write(b"".join(records[middle : middle + 300]) * 100)
 PY
