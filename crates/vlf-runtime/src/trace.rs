@@ -174,6 +174,11 @@ pub(crate) fn trace<'t, C: Counter, S: Search<'t>>(
     };
     let (step_x, mut next_x, delta_x) = axis(ix, s.o[0], s.d[0]);
     let (step_y, mut next_y, delta_y) = axis(iy, s.o[1], s.d[1]);
+    // The column and the row past which a step leaves the grid: the tile indices start within
+    // it and each moves one way only. (An axis the ray does not move along is never stepped:
+    // its next boundary is infinite, so that crossing it first means the segment ends first.)
+    let last_x = if step_x > 0 { ni - 1 } else { 0 };
+    let last_y = if step_y > 0 { ni - 1 } else { 0 };
     let mut t_enter = s.t0;
     // Each step moves one axis monotonically, so 2n + 1 visits cover any segment.
     let mut visits = 2 * n + 1;
@@ -199,7 +204,7 @@ pub(crate) fn trace<'t, C: Counter, S: Search<'t>>(
             // Which axis the ray crosses next: one comparison, for the look-ahead and the step.
             let x_first = next_x <= next_y;
             let (nx, ny) = if x_first { (ix + step_x, iy) } else { (ix, iy + step_y) };
-            let ahead = more && (0..ni).contains(&nx) && (0..ni).contains(&ny);
+            let ahead = more && if x_first { ix != last_x } else { iy != last_y };
             let next_entry = if ahead {
                 tiles.get(ny as usize * n + nx as usize).copied().unwrap_or(EMPTY_TILE)
             } else {
