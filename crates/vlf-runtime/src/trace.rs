@@ -367,6 +367,7 @@ fn visit_leaf<'t, C: Counter, S: Search<'t>>(
     // checked that the leaf's `8c` bytes lie within the section).
     let Some(ids) = block.quarters().get(at / 4 + c..at / 4 + 2 * c) else { return false };
     let mut passing = Candidates::new();
+    let mut n = 0;
     let mut g = 0;
     while g < c {
         // The box test, sixteen refs per step, into a list of ids (in a loop of its own, apart
@@ -379,15 +380,15 @@ fn visit_leaf<'t, C: Counter, S: Search<'t>>(
             let i = g + mask.trailing_zeros() as usize;
             mask &= mask - 1;
             if let Some(&id) = ids.get(i) {
-                passing.push(id);
+                n = passing.push(n, id);
             }
         }
         g += 16;
-        if passing.len() > CANDIDATES - 16 || g >= c {
-            if test_all(passing.as_slice(), tris, search, counter) {
+        if n > CANDIDATES - 16 || g >= c {
+            if test_all(passing.first(n), tris, search, counter) {
                 return true;
             }
-            passing.clear();
+            n = 0;
         }
     }
     false
@@ -418,45 +419,39 @@ fn test_all<'t, C: Counter, S: Search<'t>>(ids: &[u32], tris: &'t S::Tris, searc
     p.n > 0 && search.test4(p.ids, p.tris, p.n, counter)
 }
 
-/// The most passing refs a leaf hands to the kernel at once.
+/// The most passing refs a leaf hands to the kernel at once (a power of two).
 const CANDIDATES: usize = 64;
 
-/// A short list of triangle ids, not initialised beyond its length.
+/// Room for a short list of triangle ids, not initialised: its length is the caller's, kept
+/// apart. (Held together, an uninitialised array and a length of 0 were compiled into a store
+/// of zeros over the whole, 256 bytes per leaf.)
 struct Candidates {
     ids: [std::mem::MaybeUninit<u32>; CANDIDATES],
-    len: usize,
 }
 
 impl Candidates {
     #[inline(always)]
     fn new() -> Self {
-        Candidates { ids: [std::mem::MaybeUninit::uninit(); CANDIDATES], len: 0 }
+        Candidates { ids: [std::mem::MaybeUninit::uninit(); CANDIDATES] }
     }
 
-    /// Appends `id`; ignored when full (callers empty it while it has room for sixteen more).
+    /// Writes `id` after the first `len` ids; returns the new length. Callers empty the list
+    /// while it has room for sixteen more and push at most sixteen between; past the capacity
+    /// the last entry is overwritten (a wrong but harmless list, never a write out of bounds).
     #[inline(always)]
-    fn push(&mut self, id: u32) {
-        if let Some(slot) = self.ids.get_mut(self.len) {
-            slot.write(id);
-            self.len += 1;
-        }
+    fn push(&mut self, len: usize, id: u32) -> usize {
+        let at = len.min(CANDIDATES - 1);
+        self.ids[at].write(id);
+        at + 1
     }
 
+    /// The first `len` ids, all written by [`Candidates::push`] (whose lengths never exceed the
+    /// capacity).
     #[inline(always)]
-    fn len(&self) -> usize {
-        self.len
-    }
-
-    #[inline(always)]
-    fn clear(&mut self) {
-        self.len = 0;
-    }
-
-    #[inline(always)]
-    fn as_slice(&self) -> &[u32] {
-        let written = &self.ids[..self.len];
-        // SAFETY: `push` wrote each of the first `len` entries (and `len` never exceeds the
-        // capacity); `MaybeUninit<u32>` has the layout of `u32`.
+    fn first(&self, len: usize) -> &[u32] {
+        let written = &self.ids[..len.min(CANDIDATES)];
+        // SAFETY: `push` wrote each of the first `len` entries; `MaybeUninit<u32>` has the
+        // layout of `u32`.
         unsafe { &*(written as *const [std::mem::MaybeUninit<u32>] as *const [u32]) }
     }
 }
@@ -476,5 +471,29 @@ fn lanes(bytes: &[u8], at: usize, c: usize) -> [[u8; 16]; 4] {
             lane[..n].copy_from_slice(&tail[..n]);
             lane
         }),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The list holds what was pushed, in order, up to its capacity; past it, the last entry is
+    /// overwritten and the length stays at the capacity.
+    #[test]
+    fn candidates_keep_what_was_pushed_and_stay_within_their_room() {
+        let mut list = Candidates::new();
+        let mut n = 0;
+        for id in 0..CANDIDATES as u32 {
+            n = list.push(n, id * 3);
+        }
+        assert_eq!(n, CANDIDATES);
+        assert_eq!(list.first(n), (0..CANDIDATES as u32).map(|id| id * 3).collect::<Vec<_>>());
+        n = list.push(n, 7);
+        assert_eq!(n, CANDIDATES);
+        assert_eq!(list.first(n)[CANDIDATES - 1], 7);
+        assert_eq!(list.first(usize::MAX).len(), CANDIDATES);
+        let n = list.push(0, 11);
+        assert_eq!(list.first(n), [11]);
     }
 }
