@@ -2,9 +2,9 @@
 //! projection crosses, front to back (Amanatides and Woo 1987 in the tile grid); in each the leaves
 //! of its block (`formats/vlf.md` §5.6) that the ray's z range passes through, in ray order; in
 //! each leaf the refs whose boxes meet the ray's box, collected into a short list apart from the
-//! kernel (so that the filter's loop and the kernel's each keep their values in registers), their
-//! triangles started loading together, then tested four at a time by the leaf kernel
-//! ([`vlf_geom::TriRay::closest4`], [`vlf_geom::TriRay::any4`]). The search stops once the best hit
+//! kernel (so that the filter's loop and the kernel's each keep their values in registers), each
+//! one's triangle started loading as soon as it passes, then tested four at a time by the leaf
+//! kernel ([`vlf_geom::TriRay::closest4`], [`vlf_geom::TriRay::any4`]). The search stops once the best hit
 //! lies within the part of the ray already searched (closest hit) or at the first hit (any hit).
 //! An any-hit search walks a segment that leaves the scene from that far end, and puts off the
 //! leaf where any other segment starts until the rest is searched ([`OriginLeaf`]): a shadow ray's
@@ -381,6 +381,10 @@ fn visit_leaf<'t, C: Counter, S: Search<'t>>(
             mask &= mask - 1;
             if let Some(&id) = ids.get(i) {
                 n = passing.push(n, id);
+                // Start loading its triangle as soon as it is known to pass.
+                if let Some(t) = tris.vertices(id) {
+                    prefetch(t);
+                }
             }
         }
         g += 16;
@@ -397,12 +401,6 @@ fn visit_leaf<'t, C: Counter, S: Search<'t>>(
 /// Tests the triangles `ids`, four at a time; returns whether the search is over.
 #[inline(always)]
 fn test_all<'t, C: Counter, S: Search<'t>>(ids: &[u32], tris: &'t S::Tris, search: &mut S, counter: &mut C) -> bool {
-    // Start loading them all before the first test.
-    for &id in ids {
-        if let Some(t) = tris.vertices(id) {
-            prefetch(t);
-        }
-    }
     let mut p = Pending { ids: [0; 4], tris: [&FILLER; 4], n: 0 };
     for &id in ids {
         let Some(tri) = tris.vertices(id) else { continue };
