@@ -187,6 +187,7 @@ pub(crate) fn trace<'t, C: Counter, S: Search<'t>>(
     let (dcx, dcy) = (s.d[0] * cpu, s.d[1] * cpu);
     let tris = search.tris();
     let mut origin: Option<OriginLeaf<'_>> = None;
+    let mut passing = Candidates::new();
     // The current tile's TILES entry: the first tile's read here (and its block started, as no
     // tile before it did), each next one's carried over from the look-ahead of the tile before.
     let mut entry = tiles.get(iy as usize * n + ix as usize).copied().unwrap_or(EMPTY_TILE);
@@ -225,7 +226,7 @@ pub(crate) fn trace<'t, C: Counter, S: Search<'t>>(
                 let corner = [-r + ix as f64 * w, -r + iy as f64 * w];
                 let ray =
                     CellRay { o: [(s.o[0] - corner[0]) * cpu, (s.o[1] - corner[1]) * cpu], d: [dcx, dcy], margin };
-                if visit_tile(&block, s, &ray, lo, hi, tris, search, counter, &mut origin) {
+                if visit_tile(&block, s, &ray, lo, hi, tris, search, counter, &mut origin, &mut passing) {
                     break 'walk true;
                 }
             }
@@ -245,7 +246,7 @@ pub(crate) fn trace<'t, C: Counter, S: Search<'t>>(
         false
     };
     if !over && let Some(d) = origin {
-        visit_leaf(&d.block, d.at, d.c, d.limits, tris, search, counter);
+        visit_leaf(&d.block, d.at, d.c, d.limits, tris, search, counter, &mut passing);
     }
 }
 
@@ -303,6 +304,7 @@ fn visit_tile<'t, 'r, C: Counter, S: Search<'t>>(
     search: &mut S,
     counter: &mut C,
     origin: &mut Option<OriginLeaf<'r>>,
+    passing: &mut Candidates,
 ) -> bool {
     let bounds = block.bounds();
     let ends = block.ends();
@@ -336,7 +338,7 @@ fn visit_tile<'t, 'r, C: Counter, S: Search<'t>>(
             // The leaf the ray starts in is put off (`OriginLeaf`).
             if S::DEFER_ORIGIN && origin.is_none() && enter == s.t0 {
                 *origin = Some(OriginLeaf { block: *block, at: hdr + 8 * start, c: end - start, limits });
-            } else if visit_leaf(block, hdr + 8 * start, end - start, limits, tris, search, counter)
+            } else if visit_leaf(block, hdr + 8 * start, end - start, limits, tris, search, counter, passing)
                 || search.done(exit)
             {
                 return true;
@@ -353,6 +355,7 @@ fn visit_tile<'t, 'r, C: Counter, S: Search<'t>>(
 /// Tests the `c` refs of the leaf whose arrays start at byte `at` of `block`: those whose boxes
 /// pass `limits` go to the kernel four at a time. Returns whether the search is over.
 #[inline(always)]
+#[allow(clippy::too_many_arguments)]
 fn visit_leaf<'t, C: Counter, S: Search<'t>>(
     block: &Block<'_>,
     at: usize,
@@ -361,12 +364,12 @@ fn visit_leaf<'t, C: Counter, S: Search<'t>>(
     tris: &'t S::Tris,
     search: &mut S,
     counter: &mut C,
+    passing: &mut Candidates,
 ) -> bool {
     let bytes = block.bytes();
     // The ids: quarter `at / 4 + c + i` (the arrays start on a multiple of 4; `Block::parse`
     // checked that the leaf's `8c` bytes lie within the section).
     let Some(ids) = block.quarters().get(at / 4 + c..at / 4 + 2 * c) else { return false };
-    let mut passing = Candidates::new();
     let mut n = 0;
     let mut g = 0;
     while g < c {
@@ -420,17 +423,18 @@ fn test_all<'t, C: Counter, S: Search<'t>>(ids: &[u32], tris: &'t S::Tris, searc
 /// The most passing refs a leaf hands to the kernel at once (a power of two).
 const CANDIDATES: usize = 64;
 
-/// Room for a short list of triangle ids, not initialised: its length is the caller's, kept
-/// apart. (Held together, an uninitialised array and a length of 0 were compiled into a store
-/// of zeros over the whole, 256 bytes per leaf.)
+/// Room for the short list of a leaf's passing triangle ids; its length is the caller's, kept
+/// apart. Made once per ray and reused by every leaf: made per leaf, the array (uninitialised,
+/// then) and a length of 0 held together were compiled into a store of zeros over the whole,
+/// 256 bytes per leaf, and the length lived in memory.
 struct Candidates {
-    ids: [std::mem::MaybeUninit<u32>; CANDIDATES],
+    ids: [u32; CANDIDATES],
 }
 
 impl Candidates {
     #[inline(always)]
     fn new() -> Self {
-        Candidates { ids: [std::mem::MaybeUninit::uninit(); CANDIDATES] }
+        Candidates { ids: [0; CANDIDATES] }
     }
 
     /// Writes `id` after the first `len` ids; returns the new length. Callers empty the list
@@ -439,18 +443,14 @@ impl Candidates {
     #[inline(always)]
     fn push(&mut self, len: usize, id: u32) -> usize {
         let at = len.min(CANDIDATES - 1);
-        self.ids[at].write(id);
+        self.ids[at] = id;
         at + 1
     }
 
-    /// The first `len` ids, all written by [`Candidates::push`] (whose lengths never exceed the
-    /// capacity).
+    /// The first `len` ids (at most the capacity).
     #[inline(always)]
     fn first(&self, len: usize) -> &[u32] {
-        let written = &self.ids[..len.min(CANDIDATES)];
-        // SAFETY: `push` wrote each of the first `len` entries; `MaybeUninit<u32>` has the
-        // layout of `u32`.
-        unsafe { &*(written as *const [std::mem::MaybeUninit<u32>] as *const [u32]) }
+        &self.ids[..len.min(CANDIDATES)]
     }
 }
 
