@@ -405,16 +405,18 @@ impl Dda {
         if self.t_exit >= s.t1 {
             return false;
         }
+        // Only the coordinate that moves can leave the grid: both start inside it.
         if self.next_x <= self.next_y {
             self.ix += self.step_x;
             self.t_enter = self.next_x;
             self.next_x += self.delta_x;
+            (0..n).contains(&self.ix)
         } else {
             self.iy += self.step_y;
             self.t_enter = self.next_y;
             self.next_y += self.delta_y;
+            (0..n).contains(&self.iy)
         }
-        (0..n).contains(&self.ix) && (0..n).contains(&self.iy)
     }
 
     /// The corner `(x, y)` of the current tile in the direction's frame.
