@@ -31,8 +31,11 @@ use vlf_geom::frame::frame;
 /// scenes of up to about 16,000 triangles may get more directions. Revision 10 raises the cost of
 /// visiting a leaf to 4 on grids of 128² tiles and finer in fields of 33 directions or more
 /// (`vlf_raster::leaves::leaf_cost`, `formats/vlf.md` §6.3): their fields are smaller, and
-/// automatic parameters may reach more directions with them.
-pub const BAKER_REVISION: u32 = 10;
+/// automatic parameters may reach more directions with them. Revision 11 gives automatic
+/// parameters at least 2.5 KiB for each of a mesh's first 100,000 triangles
+/// (`crate::params::automatic_floor`) and extends their ladder to 99 and 129 directions: scenes
+/// of about 6,500 to 250,000 triangles may get larger fields.
+pub const BAKER_REVISION: u32 = 11;
 
 /// The input hash of `formats/vlf.md` §3.2.
 pub fn input_hash(scene: &Scene, request: &Request) -> [u8; 32] {

@@ -30,10 +30,28 @@ pub const DEFAULT_MAX_BYTES_PER_TRIANGLE: u64 = 1 << 10;
 /// small scene gets the directions that shorten its walks: measured in the peers benchmark
 /// (`docs/benchmarks/parameters.md`, 2026-12-06), 10,000 random triangles at 51 × 64² (15.3 MiB)
 /// traced primary rays 30–39% faster than at the 19 × 64² that 4 MiB, the floor until baker
-/// revision 9, and 1 KiB per triangle allowed, for incoherent rays 4–8% slower. Doubling the
-/// per-triangle allowance up to 100,000 triangles instead cost those scenes' incoherent rays 15%
-/// for 2–4% on primary rays: their fields outgrow the caches.
+/// revision 9, and 1 KiB per triangle allowed, for incoherent rays 4–8% slower. Scenes of more
+/// triangles get more ([`automatic_floor`]).
 pub const MIN_AUTOMATIC_BUDGET: u64 = 16 << 20;
+/// Automatic parameters get at least this many bytes for each of a mesh's first
+/// [`SMALL_SCENE_TRIANGLES`] triangles (baker revision 11): 2.5 KiB, the size the project aims at
+/// for scenes of 100,000 triangles, against 1 KiB at a million. Measured
+/// (`docs/benchmarks/parameters.md`, "2.5 KiB per triangle up to 100,000 triangles"): the field
+/// and Embree in one process, the fields taking turns, on the peers' whole 512² views and 262,144
+/// incoherent rays, the 100K random scenes traced primary rays 5–11% faster (fixed size, 73 × 64²
+/// against 33 × 64²) and 14–18% (shrinking triangles, 129 × 64² against 51 × 64²), incoherent rays
+/// 3–8% slower. Past 100,000 triangles the floor stays at 250 MB, which the per-triangle allowance
+/// overtakes at 250,000 triangles.
+pub const SMALL_SCENE_BYTES_PER_TRIANGLE: u64 = 2560;
+/// See [`SMALL_SCENE_BYTES_PER_TRIANGLE`].
+pub const SMALL_SCENE_TRIANGLES: u64 = 100_000;
+
+/// The least budget automatic parameters get for a mesh of `triangles` triangles, whatever
+/// `--max-bytes-per-triangle` says (`--max-bytes` still caps it): [`MIN_AUTOMATIC_BUDGET`], and
+/// [`SMALL_SCENE_BYTES_PER_TRIANGLE`] for each of the first [`SMALL_SCENE_TRIANGLES`].
+pub fn automatic_floor(triangles: u64) -> u64 {
+    MIN_AUTOMATIC_BUDGET.max(SMALL_SCENE_BYTES_PER_TRIANGLE * triangles.min(SMALL_SCENE_TRIANGLES))
+}
 /// Automatic refinement stops once the mean number of triangles in a non-empty tile falls to this.
 pub const SPARSE_TILE_LOAD: f64 = 3.0;
 /// Directions baked to estimate a rung's size.
@@ -46,8 +64,10 @@ const SAMPLE_DIRECTIONS: usize = 8;
 /// fields of the 100K random scene of shrinking triangles fit 51 × 64² (905 B per triangle) and
 /// trace primary rays 7–16% faster there than at 33 × 64², incoherent ones as fast
 /// (`docs/benchmarks/parameters.md`, 2026-12-02), so the ladder goes on to 51 and 73 directions
-/// and the budget stops it.
-pub const LADDER: [(u32, u32); 7] = [(2, 16), (2, 32), (2, 64), (3, 64), (4, 64), (5, 64), (6, 64)];
+/// and, since baker revision 11 gave scenes of up to 100,000 triangles 2.5 KiB each
+/// ([`SMALL_SCENE_BYTES_PER_TRIANGLE`]), to 99 and 129, which the 100K scene of shrinking
+/// triangles fits (129 × 64², 2,150 B per triangle); the budget stops it.
+pub const LADDER: [(u32, u32); 9] = [(2, 16), (2, 32), (2, 64), (3, 64), (4, 64), (5, 64), (6, 64), (7, 64), (8, 64)];
 
 /// Triangles per non-empty tile above which the automatic choice refines the ladder's tiles to
 /// [`DENSE_TILES`], if that fits the budget. Measured (`docs/benchmarks/parameters.md`): on the
@@ -265,7 +285,7 @@ pub fn choose<M: Measure>(scene: &M, config: &BakeConfig) -> Result<Choice, M::E
     // Explicit parameters are held to the absolute budget only; automatic ones also to the
     // per-triangle allowance.
     let budget = config.max_bytes;
-    let auto_budget = budget.min(config.max_bytes_per_triangle.saturating_mul(tris).max(MIN_AUTOMATIC_BUDGET));
+    let auto_budget = budget.min(config.max_bytes_per_triangle.saturating_mul(tris).max(automatic_floor(tris)));
     let explicit_n = config.directions.map(|l| Lattice::with_at_least(l as u64).n);
     if let (Some(lattice_n), Some(tiles)) = (explicit_n, config.tiles) {
         let lb = lower_bound_bytes(tris, lattice_n, tiles);
@@ -368,7 +388,7 @@ pub fn choose<M: Measure>(scene: &M, config: &BakeConfig) -> Result<Choice, M::E
             params.tiles,
             human_bytes(bytes),
             human_bytes(auto_budget),
-            human_bytes(MIN_AUTOMATIC_BUDGET)
+            human_bytes(automatic_floor(tris))
         ),
     })
 }

@@ -154,7 +154,7 @@ fn dense_tiles_are_refined_when_the_budget_allows() {
     // Tiles at the load threshold are not refined, whatever the budget.
     let model = Model::new(DENSE_TILE_LOAD as u64 * 64 * 64);
     let choice = choose(&model, &automatic(u64::MAX / 2)).unwrap();
-    assert_eq!((choice.params.lattice_n, choice.params.tiles), LADDER[6]);
+    assert_eq!((choice.params.lattice_n, choice.params.tiles), LADDER[LADDER.len() - 1]);
     assert!(!model.sampled().iter().any(|&(_, t)| t == DENSE_TILES));
     // Explicit directions or tiles are never refined.
     let config = BakeConfig { directions: Some(33), ..automatic(u64::MAX / 2) };
@@ -172,7 +172,10 @@ fn dense_tiles_are_refined_on_fewer_directions_down_to_33() {
     let m = model();
     let choice = choose(&m, &automatic(budget)).unwrap();
     assert_eq!((choice.params.lattice_n, choice.params.tiles), (4, DENSE_TILES));
-    assert_eq!(m.sampled()[LADDER.len()..], [(6, DENSE_TILES), (5, DENSE_TILES), (4, DENSE_TILES)]);
+    // (99 × 64², the rung after 73 × 64², is estimated and does not fit.)
+    let refined: Vec<(u32, u32)> = m.sampled().into_iter().filter(|&(_, t)| t == DENSE_TILES).collect();
+    assert_eq!(refined, [(6, DENSE_TILES), (5, DENSE_TILES), (4, DENSE_TILES)]);
+    assert!(m.estimate(7, 64) > budget);
     // Below 33 directions the ladder's own rung stands: a byte less keeps 73 × 64², and 19 ×
     // 128² is not tried.
     let m = model();
@@ -228,12 +231,34 @@ fn a_mesh_of_a_few_triangles_bakes_at_the_default_budget() {
 fn the_default_allowance_is_a_kibibyte_per_triangle_above_the_floor() {
     let config = BakeConfig::default();
     assert_eq!(config.max_bytes_per_triangle, 1024);
-    // 100K triangles costing 60 B each per direction, as the random scenes measure: 9 × 64²
-    // fits 1 KiB per triangle, 19 × 64² does not.
-    let model = Model::with_bytes_per_triangle(100_000, 60);
-    assert!(model.estimate(2, 64) <= 1024 * 100_000 && model.estimate(3, 64) > 1024 * 100_000);
+    // A million triangles costing 60 B each per direction, as the random scenes measure: 9 × 64²
+    // fits 1 KiB per triangle, 19 × 64² does not, and the floor is below both.
+    let model = Model::with_bytes_per_triangle(1_000_000, 60);
+    assert!(model.estimate(2, 64) <= 1024 * 1_000_000 && model.estimate(3, 64) > 1024 * 1_000_000);
+    assert!(automatic_floor(1_000_000) < model.estimate(2, 64));
     let choice = choose(&model, &config).unwrap();
     assert_eq!((choice.params.lattice_n, choice.params.tiles), (2, 64));
+}
+
+#[test]
+fn scenes_of_up_to_100k_triangles_get_two_and_a_half_kibibytes_each() {
+    assert_eq!(automatic_floor(1), MIN_AUTOMATIC_BUDGET);
+    assert_eq!(automatic_floor(6_000), MIN_AUTOMATIC_BUDGET);
+    assert_eq!(automatic_floor(10_000), 25_600_000);
+    assert_eq!(automatic_floor(100_000), 256_000_000);
+    assert_eq!(automatic_floor(4_000_000), 256_000_000, "a fixed 250 MB past 100,000 triangles");
+    // 100K triangles at 60 B each per direction: 33 × 64² fits 2.5 KiB per triangle, 51 × 64²
+    // does not; the default 1 KiB alone would stop at 9 × 64².
+    let model = Model::with_bytes_per_triangle(100_000, 60);
+    assert!(model.estimate(4, 64) <= 256_000_000 && model.estimate(5, 64) > 256_000_000);
+    assert!(model.estimate(3, 64) > 1024 * 100_000);
+    let choice = choose(&model, &BakeConfig::default()).unwrap();
+    assert_eq!((choice.params.lattice_n, choice.params.tiles), (4, 64));
+    assert!(choice.reason.contains("at least 244.1 MiB"), "{}", choice.reason);
+    // --max-bytes caps the floor.
+    let config = BakeConfig { max_bytes: model.estimate(3, 64), ..BakeConfig::default() };
+    let choice = choose(&Model::with_bytes_per_triangle(100_000, 60), &config).unwrap();
+    assert_eq!((choice.params.lattice_n, choice.params.tiles), (3, 64));
 }
 
 #[test]
