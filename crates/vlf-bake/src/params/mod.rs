@@ -21,9 +21,11 @@ pub const MARGIN_FRACTION: f64 = 1.0 / (1u64 << 20) as f64;
 pub const DEFAULT_MAX_BYTES: u64 = 4 << 30;
 /// The default per-triangle allowance of automatic parameters: 1 KiB per triangle, so a field
 /// stays proportionate to its scene. In the format 2.0 sweep (`docs/benchmarks/parameters.md`)
-/// larger fields were not clearly faster at 100K triangles, and at 1M faster on primary rays only
-/// (up to 2× at 4 KiB per triangle), never on incoherent ones; 1 KiB is also the size the
-/// project aims at for 1M-triangle scenes. `--max-bytes-per-triangle` buys the rest.
+/// larger fields were faster at 1M triangles on primary rays only (up to 2× at 4 KiB per
+/// triangle), never on incoherent ones; 1 KiB is also the size the project aims at for
+/// 1M-triangle scenes. Smaller scenes get more ([`automatic_floor`]: at 100K, timed side by side
+/// with Embree, twice the bytes bought primary rays 5–18%). `--max-bytes-per-triangle` buys the
+/// rest.
 pub const DEFAULT_MAX_BYTES_PER_TRIANGLE: u64 = 1 << 10;
 /// The smallest budget automatic parameters get, whatever the triangle count: 16 MiB. A mesh of a
 /// few triangles still bakes (its fixed sections alone exceed a per-triangle allowance), and a
