@@ -11,19 +11,18 @@
 # Reads target/single-ray/SCENE.obj and SCENE.vlf and the whole 512² views SCENE-outside-all.bin
 # and SCENE-inside-all.bin (make them with `bash docs/benchmarks/single-ray-sets.sh SCENE MESH`).
 # `default` is SCENE.vlf as that script baked it; `DxN` bakes SCENE-DxN.vlf with `--directions D
-# --tiles N` if it is missing. Adds SCENE-incoherent-big.bin, 262,144 incoherent rays as the peers
-# make them (origins uniform in the scene's box, directions uniform, seed 2), if missing. Needs
-# Debian's libembree-dev (installed when missing).
+# --tiles N` if it is missing. The incoherent rays are SCENE-incoherent-big.bin, 262,144 of them as
+# the peers trace. Needs Debian's libembree-dev (installed when missing).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 exec < <(:)
-[ $# -ge 3 ] || { sed -n 2,16p "$0" >&2; exit 2; }
+[ $# -ge 3 ] || { sed -n 2,15p "$0" >&2; exit 2; }
 s=$1
 repeats=$2
 shift 2
 W=target/single-ray
-[ -f "$W/$s.vlf" ] && [ -f "$W/$s-outside-all.bin" ] || {
-  echo "no $W/$s.vlf or its views: run docs/benchmarks/single-ray-sets.sh $s MESH first" >&2
+[ -f "$W/$s.vlf" ] && [ -f "$W/$s-outside-all.bin" ] && [ -f "$W/$s-incoherent-big.bin" ] || {
+  echo "no $W/$s.vlf or its ray sets: run docs/benchmarks/single-ray-sets.sh $s MESH first" >&2
   exit 1
 }
 if [ ! -f /usr/include/embree3/rtcore.h ]; then
@@ -47,23 +46,6 @@ for spec in "$@"; do
     --directions "${BASH_REMATCH[1]}" --tiles "${BASH_REMATCH[2]}" --max-bytes 16GiB
   fields+=("$s-$spec")
 done
-[ -f "$W/$s-incoherent-big.bin" ] || python3 - "$W" "$s" <<'PY'
-import json, math, random, struct, sys
-w, s = sys.argv[1], sys.argv[2]
-info = json.load(open(f"{w}/{s}.json"))
-c = info["center"]
-lo = [c[k] + info["aabb_min"][k] for k in range(3)]
-hi = [c[k] + info["aabb_max"][k] for k in range(3)]
-rng = random.Random(2)
-out = []
-for _ in range(262_144):
-    o = [rng.uniform(lo[k], hi[k]) for k in range(3)]
-    z = rng.uniform(-1.0, 1.0)
-    a = rng.uniform(0.0, 2.0 * math.pi)
-    q = math.sqrt(1.0 - z * z)
-    out.append(struct.pack("<8f", *o, 0.0, q * math.cos(a), q * math.sin(a), z, float("inf")))
-open(f"{w}/{s}-incoherent-big.bin", "wb").write(b"".join(out))
-PY
 out=$(mktemp)
 trap 'rm -f "$out"' EXIT
 for set in outside-all inside-all incoherent-big; do
@@ -74,9 +56,9 @@ for set in outside-all inside-all incoherent-big; do
     done
   done
 done
-python3 - "$out" "$W" "${fields[@]}" <<'PY'
+python3 - "$out" "$W" "$s" "${fields[@]}" <<'PY'
 import json, os, statistics as st, sys
-out, w, fields = sys.argv[1], sys.argv[2], sys.argv[3:]
+out, w, scene, fields = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4:]
 rows = [l.split() for l in open(out)]
 print("| rays | field | B/triangle | field ns | Embree ns | field / Embree | range |")
 print("| --- | --- | ---: | ---: | ---: | ---: | --- |")
@@ -87,7 +69,7 @@ for s in ("outside-all", "inside-all", "incoherent-big"):
             continue
         a, b, c = zip(*r)
         size = os.path.getsize(f"{w}/{f}.vlf")
-        tris = json.load(open(f"{w}/{f.split('-')[0]}.json"))["triangle_count"]
+        tris = json.load(open(f"{w}/{scene}.json"))["triangle_count"]
         print(f"| {s} | {f} | {size / tris:,.0f} | {st.median(a):.1f} | {st.median(b):.1f} | "
               f"{st.median(c):.2f} | {min(c):.2f}–{max(c):.2f} |")
 PY

@@ -7,7 +7,8 @@
 # Bakes target/single-ray/SCENE.obj (copied from MESH if given) to SCENE.vlf at the default
 # parameters, and writes next to it: SCENE-outside-all.bin and SCENE-inside-all.bin (512² primary
 # views, `vlf-bake rays`) and their middle 64 rows (SCENE-outside.bin, SCENE-inside.bin); 20,000
-# incoherent rays (origins in the scene's box, random directions, seed 1); and shadow rays (any
+# incoherent rays (origins in the scene's box, random directions, seed 1) and 262,144 more
+# (SCENE-incoherent-big.bin, seed 2, as many as the peers trace); and shadow rays (any
 # hit) from every eighth inside hit towards the peers' light, `centre + (0.3, 3, 0.2)·R`; and
 # ambient-occlusion (`-ao-shadow`) and bounce rays from every fourth inside hit; and the whole
 # outside view split by what each ray does (SCENE-outside-away/-box-miss/-hit.bin, with warm sets
@@ -20,7 +21,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 exec < <(:)
-[ $# -ge 1 ] || { sed -n 2,17p "$0" >&2; exit 2; }
+[ $# -ge 1 ] || { sed -n 2,20p "$0" >&2; exit 2; }
 s=$1
 W=target/single-ray
 mkdir -p "$W"
@@ -47,16 +48,26 @@ hi = [c[k] + info["aabb_max"][k] for k in range(3)]
 for view in ("outside", "inside"):
     data = open(f"{w}/{s}-{view}-all.bin", "rb").read()
     open(f"{w}/{s}-{view}.bin", "wb").write(data[32 * 512 * 224 : 32 * 512 * 288])
-rng = random.Random(1)
-out = []
-for _ in range(20_000):
-    o = [rng.uniform(lo[k], hi[k]) for k in range(3)]
-    z = rng.uniform(-1.0, 1.0)
-    a = rng.uniform(0.0, 2.0 * math.pi)
-    q = math.sqrt(1.0 - z * z)
-    out.append(struct.pack("<8f", *o, 0.0, q * math.cos(a), q * math.sin(a), z, float("inf")))
+
+
+def incoherent(count, seed):
+    """`count` incoherent rays: origins uniform in the scene's box, directions uniform."""
+    rng = random.Random(seed)
+    out = []
+    for _ in range(count):
+        o = [rng.uniform(lo[k], hi[k]) for k in range(3)]
+        z = rng.uniform(-1.0, 1.0)
+        a = rng.uniform(0.0, 2.0 * math.pi)
+        q = math.sqrt(1.0 - z * z)
+        out.append(struct.pack("<8f", *o, 0.0, q * math.cos(a), q * math.sin(a), z, float("inf")))
+    return out
+
+
+out = incoherent(20_000, 1)
 open(f"{w}/{s}-incoherent.bin", "wb").write(b"".join(out))
 open(f"{w}/{s}-incoherent-warm.bin", "wb").write(b"".join(out[:500]) * 40)
+# As many as the peers trace (262,144), for `fields-against-embree.sh`.
+open(f"{w}/{s}-incoherent-big.bin", "wb").write(b"".join(incoherent(262_144, 2)))
 data = open(f"{w}/{s}-outside-all.bin", "rb").read()
 open(f"{w}/{s}-outside-warm.bin", "wb").write(data[32 * 512 * 256 : 32 * 512 * 257] * 40)
 # Shadow rays, as the peers make them: from each hit of the inside view towards the light, on
