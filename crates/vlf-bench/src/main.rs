@@ -36,7 +36,8 @@ struct Common {
     /// for peers, target/peers].
     #[arg(long, global = true)]
     work: Option<PathBuf>,
-    /// Timed runs per measurement, after a warm-up run [default: 3; for peers, 5].
+    /// Timed runs per measurement, after a warm-up run [default: 3; for peers, 9 rounds; for
+    /// dynamic, 5].
     #[arg(long, global = true)]
     repeats: Option<usize>,
     /// Width and height of each frame.
@@ -237,7 +238,7 @@ fn peers(a: PeersArgs, c: &Common) -> Result<()> {
         out: c.out.clone(),
         resolution: if a.quick { 128 } else { c.resolution },
         incoherent: if a.quick { 16_384 } else { a.incoherent },
-        repeats: c.repeats.unwrap_or(5),
+        repeats: c.repeats.unwrap_or(9),
         threads: a.threads,
         check_rays: a.check_rays,
         check_all_below: a.check_all_below,

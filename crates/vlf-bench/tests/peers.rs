@@ -16,7 +16,7 @@ fn config(dir: &std::path::Path) -> PeersConfig {
         out: dir.join("out"),
         resolution: 24,
         incoherent: 600,
-        repeats: 1,
+        repeats: 3,
         threads: vec![1, 2],
         check_rays: 100,
         check_all_below: 1_000,
@@ -66,6 +66,15 @@ fn every_contestant_answers_and_the_exact_ones_match_the_brute_force() {
         // Every contestant at both thread counts, with a rate.
         assert_eq!(set.speeds.len(), 2 * names.len());
         assert!(set.speeds.iter().all(|s| s.mrays_per_s > 0.0 && s.mrays_per_s.is_finite()));
+        // Three rounds: every contestant ran once in each, so the field pairs with each peer.
+        assert!(set.speeds.iter().all(|s| s.runs_s.len() == 3), "{:?}", set.speeds);
+        for c in &names[1..] {
+            for t in [1, 2] {
+                let r = vlf_bench::peers::report::paired_ratios(set, "field", c, t).unwrap();
+                assert_eq!(r.len(), 3);
+                assert!(r.iter().all(|x| x.is_finite() && *x > 0.0), "{c}: {r:?}");
+            }
+        }
         for c in &set.checks {
             // Below check_all_below: every ray is checked.
             assert_eq!(c.rays, set.rays);

@@ -6,7 +6,8 @@
 //! The flow per scene: load the triangles ([`scenes`]); bake the field at its default automatic
 //! parameters and open it; make the ray sets ([`rays`]; the shadow rays start from the field's
 //! primary hits); build the other contestants; check a sample of every set against the brute
-//! force ([`check`]); time every contestant on every set at each thread count ([`time_set`]);
+//! force ([`check`]); time every contestant on every set at each thread count, the contestants
+//! taking turns run by run ([`time_round_robin`]);
 //! with `--sweep`, bake the field again at explicit parameters and time it. The report
 //! ([`report`]) is rewritten after every scene, so a long run leaves its finished scenes behind.
 
@@ -58,31 +59,71 @@ fn field_info(f: &FieldContestant, triangles: usize) -> FieldInfo {
     }
 }
 
-/// Times `c` on `set` in `pool`: one warm-up run, then `repeats` timed runs; rays are split into
-/// chunks of `CHUNK` (1,024) that the pool's threads take in turn, one query per ray.
+/// One timed run of `c` over `set` in `pool`: rays in chunks of `CHUNK` (1,024) that the pool's
+/// threads take in turn, one query per ray; the answers go to `closest` or `any`. Seconds.
+fn run_once(
+    c: &dyn Contestant,
+    set: &RaySet,
+    pool: &rayon::ThreadPool,
+    closest: &mut [Option<PeerHit>],
+    any: &mut [bool],
+) -> f64 {
+    let start = Instant::now();
+    pool.install(|| match set.query {
+        Query::Closest => set
+            .rays
+            .par_chunks(CHUNK)
+            .zip(closest.par_chunks_mut(CHUNK))
+            .for_each(|(r, o)| c.closest_hits(black_box(r), o)),
+        Query::Any => {
+            set.rays.par_chunks(CHUNK).zip(any.par_chunks_mut(CHUNK)).for_each(|(r, o)| c.any_hits(black_box(r), o))
+        }
+    });
+    let s = start.elapsed().as_secs_f64();
+    black_box((&closest, &any));
+    s
+}
+
+/// Times `c` on `set` in `pool`: one warm-up run, then `repeats` timed runs back to back.
+/// Returns the median and the runs, in seconds.
 pub fn time_set(c: &dyn Contestant, set: &RaySet, pool: &rayon::ThreadPool, repeats: usize) -> (f64, Vec<f64>) {
     let mut closest: Vec<Option<PeerHit>> = vec![None; set.rays.len()];
     let mut any = vec![false; set.rays.len()];
-    let mut once = || {
-        let start = Instant::now();
-        pool.install(|| match set.query {
-            Query::Closest => set
-                .rays
-                .par_chunks(CHUNK)
-                .zip(closest.par_chunks_mut(CHUNK))
-                .for_each(|(r, o)| c.closest_hits(black_box(r), o)),
-            Query::Any => {
-                set.rays.par_chunks(CHUNK).zip(any.par_chunks_mut(CHUNK)).for_each(|(r, o)| c.any_hits(black_box(r), o))
-            }
-        });
-        let s = start.elapsed().as_secs_f64();
-        black_box((&closest, &any));
-        s
-    };
-    once();
-    let runs: Vec<f64> = (0..repeats.max(1)).map(|_| once()).collect();
+    run_once(c, set, pool, &mut closest, &mut any);
+    let runs: Vec<f64> = (0..repeats.max(1)).map(|_| run_once(c, set, pool, &mut closest, &mut any)).collect();
     let mut sorted = runs.clone();
     (median(&mut sorted), runs)
+}
+
+/// Times every contestant of `all` on `set` in `pool`, in rounds: a warm-up run of each, then
+/// `repeats` rounds in which each contestant runs once, in turn. A slow spell of the machine (a
+/// neighbour on the host, a frequency change) then falls on every contestant alike instead of on
+/// whichever was running, and run `k` of one contestant can be paired with run `k` of another
+/// ([`report::ratio`] takes the median of those paired ratios). Returns each contestant's median
+/// and runs, in seconds, in `all`'s order.
+pub fn time_round_robin(
+    all: &[&dyn Contestant],
+    set: &RaySet,
+    pool: &rayon::ThreadPool,
+    repeats: usize,
+) -> Vec<(f64, Vec<f64>)> {
+    let mut closest: Vec<Option<PeerHit>> = vec![None; set.rays.len()];
+    let mut any = vec![false; set.rays.len()];
+    for c in all {
+        run_once(*c, set, pool, &mut closest, &mut any);
+    }
+    let mut runs = vec![Vec::with_capacity(repeats.max(1)); all.len()];
+    for _ in 0..repeats.max(1) {
+        for (c, r) in all.iter().zip(&mut runs) {
+            r.push(run_once(*c, set, pool, &mut closest, &mut any));
+        }
+    }
+    runs.into_iter()
+        .map(|r| {
+            let mut sorted = r.clone();
+            (median(&mut sorted), r)
+        })
+        .collect()
 }
 
 fn pools(threads: &[usize]) -> anyhow::Result<Vec<(usize, rayon::ThreadPool)>> {
@@ -194,9 +235,9 @@ pub fn run_scene(spec: &SceneSpec, cfg: &PeersConfig) -> anyhow::Result<SceneRes
         note(cfg.verbose, format!("{} / {}: a miss to memory costs {memory_latency_ns:.1} ns", scene.name, set.name));
         let mut speeds = Vec::new();
         for (threads, pool) in &pools {
-            for c in &all {
-                let load = load_average();
-                let (median_s, runs_s) = time_set(*c, set, pool, cfg.repeats);
+            let load = load_average();
+            let timed = time_round_robin(&all, set, pool, cfg.repeats);
+            for (c, (median_s, runs_s)) in all.iter().zip(timed) {
                 let mrays_per_s = set.rays.len() as f64 / median_s / 1e6;
                 note(
                     cfg.verbose,
