@@ -374,7 +374,7 @@ impl Report {
         );
         let _ = writeln!(
             m,
-            "`field / Embree` is the median over {} rounds of the ratio within a round (the contestants take turns in each round), with the lowest and highest round in brackets. The floor the issue must show is 1.0× on primary and shadow rays and 0.7× on incoherent rays.\n",
+            "`field / Embree` is the median over {} rounds of the ratio within a round (the contestants take turns in each round), with the lowest and highest round in brackets. The floor the issue must show is 1.0× on primary rays and 0.7× on incoherent rays; the shadow rays are held to the primary rays' floor here, as the issue asks the same of any hit.\n",
             self.repeats
         );
         let _ = writeln!(
