@@ -34,8 +34,10 @@ use vlf_geom::frame::frame;
 /// automatic parameters may reach more directions with them. Revision 11 gives automatic
 /// parameters at least 2.5 KiB for each of a mesh's first 100,000 triangles
 /// (`crate::params::automatic_floor`) and extends their ladder to 99 and 129 directions: scenes
-/// of about 6,500 to 250,000 triangles may get larger fields.
-pub const BAKER_REVISION: u32 = 11;
+/// of about 6,500 to 250,000 triangles may get larger fields. Revision 12 lets that floor grow past
+/// 100,000 triangles as the square root of the triangle count instead of staying at 256 MB: scenes
+/// of 100,000 to 625,000 triangles may get larger fields.
+pub const BAKER_REVISION: u32 = 12;
 
 /// The input hash of `formats/vlf.md` §3.2.
 pub fn input_hash(scene: &Scene, request: &Request) -> [u8; 32] {

@@ -91,9 +91,9 @@ pub struct BakeArgs {
     #[arg(long, default_value = "4GiB", value_parser = size(), value_name = "SIZE", allow_negative_numbers = true)]
     pub max_bytes: u64,
     /// Automatic parameters aim at no more than this many bytes of field per triangle (any mesh
-    /// gets at least 16 MiB, and 2.5 KiB for each of its first 100,000 triangles, so that a few
-    /// triangles always bake and small scenes get the directions that make them fast; --max-bytes
-    /// caps both).
+    /// gets at least 16 MiB, and 2.5 KiB for each of its first 100,000 triangles, less and less
+    /// past them down to 1 KiB at 625,000, so that a few triangles always bake and small scenes
+    /// get the directions that make them fast; --max-bytes caps both).
     #[arg(long, default_value = "1KiB", value_parser = size(), value_name = "SIZE", allow_negative_numbers = true)]
     pub max_bytes_per_triangle: u64,
     /// Worker threads, 1 to 1024; more than the cores available are reduced to them, with a warning

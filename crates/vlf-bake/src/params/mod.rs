@@ -42,18 +42,33 @@ pub const MIN_AUTOMATIC_BUDGET: u64 = 16 << 20;
 /// and Embree in one process, the fields taking turns, on the peers' whole 512² views and 262,144
 /// incoherent rays, the 100K random scenes traced primary rays 5–11% faster (fixed size, 73 × 64²
 /// against 33 × 64²) and 14–18% (shrinking triangles, 129 × 64² against 51 × 64²), incoherent rays
-/// 3–8% slower. Past 100,000 triangles the floor stays at 250 MB, which the per-triangle allowance
-/// overtakes at 250,000 triangles.
+/// 3–8% slower. Past 100,000 triangles the floor grows as the square root of the triangle count
+/// ([`automatic_floor`]).
 pub const SMALL_SCENE_BYTES_PER_TRIANGLE: u64 = 2560;
 /// See [`SMALL_SCENE_BYTES_PER_TRIANGLE`].
 pub const SMALL_SCENE_TRIANGLES: u64 = 100_000;
 
-/// The least budget automatic parameters get for a mesh of `triangles` triangles, whatever
+/// The least budget automatic parameters get for a mesh of `n` triangles, whatever
 /// `--max-bytes-per-triangle` says (`--max-bytes` still caps it): [`MIN_AUTOMATIC_BUDGET`], and
-/// [`SMALL_SCENE_BYTES_PER_TRIANGLE`] for each of the first [`SMALL_SCENE_TRIANGLES`].
-pub fn automatic_floor(triangles: u64) -> u64 {
-    MIN_AUTOMATIC_BUDGET.max(SMALL_SCENE_BYTES_PER_TRIANGLE * triangles.min(SMALL_SCENE_TRIANGLES))
+/// [`SMALL_SCENE_BYTES_PER_TRIANGLE`] for each triangle up to [`SMALL_SCENE_TRIANGLES`]; past
+/// that, `2.5 KiB × √(100,000 · n)` (baker revision 12) up to [`FLOOR_TRIANGLES`], where it meets the
+/// default 1 KiB per triangle: 1,619 B per triangle at 250,000, 1,145 at 500,000. So the
+/// allowance per triangle falls smoothly from the size the project aims at for 100K triangles
+/// towards the one for 1M, where revision 11 held it at a flat 256 MB, which left a scene of
+/// 250,000 triangles 1 KiB each. Measured (`docs/benchmarks/parameters.md`, "Between 100K and 1M
+/// triangles"): 250,000 random triangles of shrinking size at 99 × 64² (1,432 B per triangle)
+/// against 51 × 64² (759 B), the field and Embree taking turns: primary rays 8–12% faster, the
+/// inside view from 0.99 to 1.07 of Embree. The square root is an integer one: the choice, and so
+/// the field, is the same on every platform.
+pub fn automatic_floor(n: u64) -> u64 {
+    let scaled = if n <= SMALL_SCENE_TRIANGLES { n } else { (SMALL_SCENE_TRIANGLES * n.min(FLOOR_TRIANGLES)).isqrt() };
+    MIN_AUTOMATIC_BUDGET.max(SMALL_SCENE_BYTES_PER_TRIANGLE * scaled)
 }
+
+/// Where [`automatic_floor`] stops growing: 625,000 triangles, at which it reaches the default
+/// 1 KiB per triangle (640 MB). Past it the floor stays there, so that it never overrides a
+/// `--max-bytes-per-triangle` by more than a fixed amount on large scenes.
+pub const FLOOR_TRIANGLES: u64 = 625_000;
 /// Automatic refinement stops once the mean number of triangles in a non-empty tile falls to this.
 pub const SPARSE_TILE_LOAD: f64 = 3.0;
 /// Directions baked to estimate a rung's size.

@@ -198,10 +198,10 @@ fn the_ladder_stops_once_tiles_are_nearly_singular() {
 fn the_per_triangle_allowance_caps_automatic_parameters() {
     // The allowance times the triangles lies between the estimates of rungs 1 and 2, both above
     // the floor.
-    let model = Model::with_costs(1_000_000, 8, 4096);
-    let allowance = model.estimate(LADDER[1].0, LADDER[1].1).div_ceil(1_000_000);
-    assert!(allowance * 1_000_000 < model.estimate(LADDER[2].0, LADDER[2].1));
-    assert!(model.estimate(LADDER[1].0, LADDER[1].1) > MIN_AUTOMATIC_BUDGET);
+    let model = Model::with_costs(4_000_000, 24, 4096);
+    let allowance = model.estimate(LADDER[1].0, LADDER[1].1).div_ceil(4_000_000);
+    assert!(allowance * 4_000_000 < model.estimate(LADDER[2].0, LADDER[2].1));
+    assert!(model.estimate(LADDER[1].0, LADDER[1].1) > automatic_floor(4_000_000));
     let config = BakeConfig { max_bytes: u64::MAX / 2, max_bytes_per_triangle: allowance, ..BakeConfig::default() };
     let choice = choose(&model, &config).unwrap();
     assert_eq!((choice.params.lattice_n, choice.params.tiles), LADDER[1]);
@@ -231,22 +231,35 @@ fn a_mesh_of_a_few_triangles_bakes_at_the_default_budget() {
 fn the_default_allowance_is_a_kibibyte_per_triangle_above_the_floor() {
     let config = BakeConfig::default();
     assert_eq!(config.max_bytes_per_triangle, 1024);
-    // A million triangles costing 60 B each per direction, as the random scenes measure: 9 × 64²
+    // Two million triangles costing 60 B each per direction, as the random scenes measure: 9 × 64²
     // fits 1 KiB per triangle, 19 × 64² does not, and the floor is below both.
-    let model = Model::with_bytes_per_triangle(1_000_000, 60);
-    assert!(model.estimate(2, 64) <= 1024 * 1_000_000 && model.estimate(3, 64) > 1024 * 1_000_000);
-    assert!(automatic_floor(1_000_000) < model.estimate(2, 64));
+    let model = Model::with_bytes_per_triangle(2_000_000, 60);
+    assert!(model.estimate(2, 64) <= 1024 * 2_000_000 && model.estimate(3, 64) > 1024 * 2_000_000);
+    assert!(automatic_floor(2_000_000) < model.estimate(2, 64));
     let choice = choose(&model, &config).unwrap();
     assert_eq!((choice.params.lattice_n, choice.params.tiles), (2, 64));
 }
 
 #[test]
-fn scenes_of_up_to_100k_triangles_get_two_and_a_half_kibibytes_each() {
+fn scenes_of_up_to_100k_triangles_get_two_and_a_half_kibibytes_each_and_larger_ones_less_and_less() {
     assert_eq!(automatic_floor(1), MIN_AUTOMATIC_BUDGET);
     assert_eq!(automatic_floor(6_000), MIN_AUTOMATIC_BUDGET);
     assert_eq!(automatic_floor(10_000), 25_600_000);
     assert_eq!(automatic_floor(100_000), 256_000_000);
-    assert_eq!(automatic_floor(4_000_000), 256_000_000, "a fixed 250 MB past 100,000 triangles");
+    // Past 100K, 2.5 KiB × √(100,000 · n): 1,619 B per triangle at 250K, 1,145 at 500K, up to
+    // 625K, where it meets the default 1 KiB per triangle and stops.
+    assert_eq!(automatic_floor(100_001), 256_000_000);
+    assert_eq!(automatic_floor(250_000), 2560 * 158_113);
+    assert_eq!(automatic_floor(500_000), 2560 * 223_606);
+    assert_eq!(automatic_floor(FLOOR_TRIANGLES), 1024 * 625_000);
+    assert_eq!(automatic_floor(4_000_000), 1024 * 625_000, "a fixed 640 MB past 625,000 triangles");
+    assert_eq!(automatic_floor(u64::MAX), 1024 * 625_000);
+    let mut last = 0;
+    for n in (0..2_000_000).step_by(997) {
+        assert!(automatic_floor(n) >= last, "the floor never falls as triangles are added ({n})");
+        assert!(automatic_floor(n) <= MIN_AUTOMATIC_BUDGET.max(2560 * n), "nor exceeds 2.5 KiB a triangle ({n})");
+        last = automatic_floor(n);
+    }
     // 100K triangles at 60 B each per direction: 33 × 64² fits 2.5 KiB per triangle, 51 × 64²
     // does not; the default 1 KiB alone would stop at 9 × 64².
     let model = Model::with_bytes_per_triangle(100_000, 60);

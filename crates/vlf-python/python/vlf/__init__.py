@@ -368,7 +368,8 @@ def _options(options: dict) -> dict:
 
 def _shim_options(options: dict, triangles: int) -> dict:
     """The shims' bake options: the library's defaults (which give any mesh, however small, a
-    budget of at least 16 MiB, and 2.5 KiB for each of its first 100,000 triangles), through the
+    budget of at least 16 MiB, and 2.5 KiB for each of its first 100,000 triangles, less and less
+    past them down to 1 KiB at 625,000), through the
     cache unless told otherwise. ``triangles`` is unused and kept for the shims' calls."""
     del triangles
     out = dict(options)
