@@ -36,8 +36,11 @@ use vlf_geom::frame::frame;
 /// (`crate::params::automatic_floor`) and extends their ladder to 99 and 129 directions: scenes
 /// of about 6,500 to 250,000 triangles may get larger fields. Revision 12 lets that floor grow past
 /// 100,000 triangles as the square root of the triangle count instead of staying at 256 MB: scenes
-/// of 100,000 to 625,000 triangles may get larger fields.
-pub const BAKER_REVISION: u32 = 12;
+/// of 100,000 to 625,000 triangles may get larger fields. Revision 13 coarsens the automatic
+/// parameters' 64² tiles to 32² where they hold fewer than 64 triangles on average
+/// (`crate::params::COARSE_TILE_LOAD`) and climbs the directions again: sparse and small scenes
+/// get different fields.
+pub const BAKER_REVISION: u32 = 13;
 
 /// The input hash of `formats/vlf.md` §3.2.
 pub fn input_hash(scene: &Scene, request: &Request) -> [u8; 32] {

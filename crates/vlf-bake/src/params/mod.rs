@@ -83,7 +83,9 @@ const SAMPLE_DIRECTIONS: usize = 8;
 /// (`docs/benchmarks/parameters.md`, 2026-12-02), so the ladder goes on to 51 and 73 directions
 /// and, since baker revision 11 gave scenes of up to 100,000 triangles 2.5 KiB each
 /// ([`SMALL_SCENE_BYTES_PER_TRIANGLE`]), to 99 and 129, which the 100K scene of shrinking
-/// triangles fits (129 × 64², 2,150 B per triangle); the budget stops it.
+/// triangles fits (129 × 64², 2,150 B per triangle); the budget stops it. (The sweep's "32² tiles
+/// are slow" held on the few directions it had; on sparse scenes, with many directions, they are
+/// the faster: [`COARSE_TILE_LOAD`].)
 pub const LADDER: [(u32, u32); 9] = [(2, 16), (2, 32), (2, 64), (3, 64), (4, 64), (5, 64), (6, 64), (7, 64), (8, 64)];
 
 /// Triangles per non-empty tile above which the automatic choice refines the ladder's tiles to
@@ -106,6 +108,19 @@ pub const DENSE_TILES: u32 = 128;
 /// faster than 33 × 128², and 33 × 128² was the best of the earlier ladder's; fewer directions
 /// at finer tiles were not compared with the ladder's rung above them.
 pub const DENSE_MIN_LATTICE: u32 = 4;
+
+/// Triangles per non-empty tile below which the automatic choice coarsens the ladder's 64² tiles
+/// to [`COARSE_TILES`] and climbs the directions again (baker revision 13): where tiles hold few
+/// triangles, a ray crosses many of them for little work in each, and coarser tiles shorten the
+/// walk more than their longer leaves cost. Measured (`docs/benchmarks/parameters.md`, "Coarser
+/// tiles for sparse scenes"), the field and Embree taking turns on the peers' views: random
+/// scenes of 3,000 (5 triangles per non-empty 64² tile), 10,000 (16) and 30,000 (45) triangles
+/// and the bunny (13) traced every ray set faster at 32² (10K: inside 0.68 → 0.94 of Embree);
+/// the 100K scene of shrinking triangles (94) traced as fast, the fixed-size one (150) slower.
+pub const COARSE_TILE_LOAD: f64 = 64.0;
+
+/// The tiles per side that sparse tiles are coarsened to.
+pub const COARSE_TILES: u32 = 32;
 
 pub use vlf_raster::{DEFAULT_LEAF_SIZE, DEFAULT_MAX_DEPTH, DepthPolicy};
 
@@ -378,6 +393,27 @@ pub fn choose<M: Measure>(scene: &M, config: &BakeConfig) -> Result<Choice, M::E
             let (bytes, load) = estimate(scene, &finer)?;
             if bytes <= auto_budget {
                 chosen = Some((finer, bytes, load));
+                break;
+            }
+        }
+    }
+    // Sparse tiles: where the ladder's 64² tiles hold few triangles, a ray crosses many of them
+    // for little work in each. Automatic parameters coarsen such tiles to COARSE_TILES and take
+    // the most directions of the ladder that then fit (at least the ones reached: coarser tiles
+    // make a smaller field on the same directions).
+    if let (None, None, Some((p, _, load))) = (explicit_n, config.tiles, chosen)
+        && load < COARSE_TILE_LOAD
+        && p.tiles > COARSE_TILES
+    {
+        let top = rungs.iter().map(|&(ln, _)| ln).max().unwrap_or(p.lattice_n);
+        for lattice_n in (p.lattice_n..=top).rev() {
+            if lower_bound_bytes(tris, lattice_n, COARSE_TILES) > auto_budget {
+                continue;
+            }
+            let coarser = params_for(scene.radius(), lattice_n, COARSE_TILES, config.depth);
+            let (bytes, load) = estimate(scene, &coarser)?;
+            if bytes <= auto_budget {
+                chosen = Some((coarser, bytes, load));
                 break;
             }
         }

@@ -5,11 +5,13 @@ use std::cell::RefCell;
 
 /// A scene whose directions cost what a model says: `a n² + b T + 200` bytes per direction
 /// (above the lower bound, as real directions are; `a` = 16 and `b` = 8 unless said), and
-/// `T / n²` triangles per non-empty tile (at least one). Records every rung it is asked about.
+/// `c T / n²` triangles per non-empty tile (at least one; `c` = 1 unless said). Records every
+/// rung it is asked about.
 struct Model {
     triangles: u64,
     per_triangle: u64,
     per_tile: u64,
+    clustering: f64,
     sampled: RefCell<Vec<(u32, u32)>>,
 }
 
@@ -23,7 +25,12 @@ impl Model {
     }
 
     fn with_costs(triangles: u64, per_triangle: u64, per_tile: u64) -> Self {
-        Model { triangles, per_triangle, per_tile, sampled: RefCell::new(Vec::new()) }
+        Model { triangles, per_triangle, per_tile, clustering: 1.0, sampled: RefCell::new(Vec::new()) }
+    }
+
+    /// The same scene with its triangles `c` times as crowded in the tiles that hold any.
+    fn clustered(self, c: f64) -> Self {
+        Model { clustering: c, ..self }
     }
 
     fn bytes_per_direction(&self, tiles: u32) -> u64 {
@@ -31,7 +38,7 @@ impl Model {
     }
 
     fn load(&self, tiles: u32) -> f64 {
-        (self.triangles as f64 / (tiles as f64 * tiles as f64)).max(1.0)
+        (self.clustering * self.triangles as f64 / (tiles as f64 * tiles as f64)).max(1.0)
     }
 
     /// The estimate `choose` makes of a rung.
@@ -186,12 +193,43 @@ fn dense_tiles_are_refined_on_fewer_directions_down_to_33() {
 
 #[test]
 fn the_ladder_stops_once_tiles_are_nearly_singular() {
-    // 3 × 64² triangles: three per tile at 64² tiles.
+    // 3 × 64² triangles: three per tile at 64² tiles. The ladder stops there; then the sparse
+    // tiles are coarsened to 32², on the most directions (the budget does not stop them).
     let model = Model::new(3 * 64 * 64);
     let choice = choose(&model, &automatic(u64::MAX / 2)).unwrap();
-    assert_eq!((choice.params.lattice_n, choice.params.tiles), (2, 64));
-    assert_eq!(model.sampled(), LADDER[..3], "nothing finer is estimated");
-    assert!(choice.reason.ends_with(", 3.0 triangles per non-empty tile"), "{}", choice.reason);
+    assert_eq!((choice.params.lattice_n, choice.params.tiles), (8, COARSE_TILES));
+    assert_eq!(model.sampled()[..3], LADDER[..3], "nothing finer is estimated");
+    assert_eq!(model.sampled()[3..], [(8, COARSE_TILES)]);
+    assert!(choice.reason.ends_with(", 12.0 triangles per non-empty tile"), "{}", choice.reason);
+}
+
+#[test]
+fn sparse_tiles_are_coarsened_and_the_directions_climb_as_far_as_the_budget_allows() {
+    // 20 triangles per 64² tile: below COARSE_TILE_LOAD.
+    let model = || Model::new(20 * 64 * 64);
+    let m = model();
+    let choice = choose(&m, &automatic(u64::MAX / 2)).unwrap();
+    assert_eq!((choice.params.lattice_n, choice.params.tiles), (8, COARSE_TILES));
+    assert_eq!(m.sampled()[..LADDER.len()], LADDER, "the ladder first, to its top");
+    assert!(choice.reason.ends_with(", 80.0 triangles per non-empty tile"), "{}", choice.reason);
+    // A budget that fits 73 × 32² but not 99 × 32²: 73 × 32², though the ladder stopped at 64²
+    // on fewer directions (coarser tiles on the same directions make a smaller field).
+    let budget = m.estimate(6, COARSE_TILES);
+    assert!(m.estimate(7, COARSE_TILES) > budget && m.estimate(6, 64) > budget);
+    let m = model();
+    let choice = choose(&m, &automatic(budget)).unwrap();
+    assert_eq!((choice.params.lattice_n, choice.params.tiles), (6, COARSE_TILES));
+    // Tiles that hold COARSE_TILE_LOAD triangles or more stay at 64².
+    let m = model().clustered(COARSE_TILE_LOAD / 20.0);
+    let choice = choose(&m, &automatic(u64::MAX / 2)).unwrap();
+    assert_eq!((choice.params.lattice_n, choice.params.tiles), (8, 64));
+    assert_eq!(m.sampled(), LADDER, "nothing coarser is estimated");
+    // Explicit tiles or directions are never coarsened.
+    let fixed = BakeConfig { tiles: Some(64), ..automatic(u64::MAX / 2) };
+    assert_eq!(choose(&model(), &fixed).unwrap().params.tiles, 64);
+    // (With 513 directions fixed the tiles climb to 64², and stay there.)
+    let fixed = BakeConfig { directions: Some(513), ..automatic(u64::MAX / 2) };
+    assert_eq!(choose(&model(), &fixed).unwrap().params.tiles, 64);
 }
 
 #[test]
@@ -262,7 +300,8 @@ fn scenes_of_up_to_100k_triangles_get_two_and_a_half_kibibytes_each_and_larger_o
     }
     // 100K triangles at 60 B each per direction: 33 × 64² fits 2.5 KiB per triangle, 51 × 64²
     // does not; the default 1 KiB alone would stop at 9 × 64².
-    let model = Model::with_bytes_per_triangle(100_000, 60);
+    // (Clustered so that its tiles are not sparse: COARSE_TILE_LOAD does not apply.)
+    let model = Model::with_bytes_per_triangle(100_000, 60).clustered(4.0);
     assert!(model.estimate(4, 64) <= 256_000_000 && model.estimate(5, 64) > 256_000_000);
     assert!(model.estimate(3, 64) > 1024 * 100_000);
     let choice = choose(&model, &BakeConfig::default()).unwrap();
@@ -270,7 +309,7 @@ fn scenes_of_up_to_100k_triangles_get_two_and_a_half_kibibytes_each_and_larger_o
     assert!(choice.reason.contains("at least 244.1 MiB"), "{}", choice.reason);
     // --max-bytes caps the floor.
     let config = BakeConfig { max_bytes: model.estimate(3, 64), ..BakeConfig::default() };
-    let choice = choose(&Model::with_bytes_per_triangle(100_000, 60), &config).unwrap();
+    let choice = choose(&Model::with_bytes_per_triangle(100_000, 60).clustered(4.0), &config).unwrap();
     assert_eq!((choice.params.lattice_n, choice.params.tiles), (3, 64));
 }
 
