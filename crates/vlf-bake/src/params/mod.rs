@@ -299,6 +299,28 @@ fn params_for(radius: f64, lattice_n: u32, tiles: u32, depth: DepthPolicy) -> Pa
 
 /// Estimated size of a field: sample directions measured, scaled to all directions; and the mean
 /// triangles per non-empty tile of the sample.
+/// The first of `lattices` on which `tiles`² tiles fit `budget`, with its estimated size and
+/// load; rungs whose lower bound is over the budget are not estimated.
+fn first_that_fits<M: Measure>(
+    scene: &M,
+    lattices: impl Iterator<Item = u32>,
+    tiles: u32,
+    budget: u64,
+    depth: DepthPolicy,
+) -> Result<Option<(Params, u64, f64)>, M::Error> {
+    for lattice_n in lattices {
+        if lower_bound_bytes(scene.triangle_count(), lattice_n, tiles) > budget {
+            continue;
+        }
+        let p = params_for(scene.radius(), lattice_n, tiles, depth);
+        let (bytes, load) = estimate(scene, &p)?;
+        if bytes <= budget {
+            return Ok(Some((p, bytes, load)));
+        }
+    }
+    Ok(None)
+}
+
 fn estimate<M: Measure>(scene: &M, p: &Params) -> Result<(u64, f64), M::Error> {
     let sample = scene.sample(p, SAMPLE_DIRECTIONS)?;
     let stats = &sample.statistics;
@@ -385,16 +407,9 @@ pub fn choose<M: Measure>(scene: &M, config: &BakeConfig) -> Result<Choice, M::E
             .iter()
             .rev()
             .filter(|&&(ln, t)| t == p.tiles && (ln == p.lattice_n || (DENSE_MIN_LATTICE..p.lattice_n).contains(&ln)));
-        for &(lattice_n, _) in reached {
-            if lower_bound_bytes(tris, lattice_n, DENSE_TILES) > auto_budget {
-                continue;
-            }
-            let finer = params_for(scene.radius(), lattice_n, DENSE_TILES, config.depth);
-            let (bytes, load) = estimate(scene, &finer)?;
-            if bytes <= auto_budget {
-                chosen = Some((finer, bytes, load));
-                break;
-            }
+        if let Some(finer) = first_that_fits(scene, reached.map(|&(ln, _)| ln), DENSE_TILES, auto_budget, config.depth)?
+        {
+            chosen = Some(finer);
         }
     }
     // Sparse tiles: where the ladder's 64² tiles hold few triangles, a ray crosses many of them
@@ -406,16 +421,10 @@ pub fn choose<M: Measure>(scene: &M, config: &BakeConfig) -> Result<Choice, M::E
         && p.tiles > COARSE_TILES
     {
         let top = rungs.iter().map(|&(ln, _)| ln).max().unwrap_or(p.lattice_n);
-        for lattice_n in (p.lattice_n..=top).rev() {
-            if lower_bound_bytes(tris, lattice_n, COARSE_TILES) > auto_budget {
-                continue;
-            }
-            let coarser = params_for(scene.radius(), lattice_n, COARSE_TILES, config.depth);
-            let (bytes, load) = estimate(scene, &coarser)?;
-            if bytes <= auto_budget {
-                chosen = Some((coarser, bytes, load));
-                break;
-            }
+        if let Some(coarser) =
+            first_that_fits(scene, (p.lattice_n..=top).rev(), COARSE_TILES, auto_budget, config.depth)?
+        {
+            chosen = Some(coarser);
         }
     }
     let Some((params, bytes, load)) = chosen else {
