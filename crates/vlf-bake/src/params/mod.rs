@@ -297,8 +297,6 @@ fn params_for(radius: f64, lattice_n: u32, tiles: u32, depth: DepthPolicy) -> Pa
     Params { lattice_n, tiles, depth, margin: radius * MARGIN_FRACTION }
 }
 
-/// Estimated size of a field: sample directions measured, scaled to all directions; and the mean
-/// triangles per non-empty tile of the sample.
 /// The first of `lattices` on which `tiles`² tiles fit `budget`, with its estimated size and
 /// load; rungs whose lower bound is over the budget are not estimated.
 fn first_that_fits<M: Measure>(
@@ -321,6 +319,8 @@ fn first_that_fits<M: Measure>(
     Ok(None)
 }
 
+/// Estimated size of a field: sample directions measured, scaled to all directions; and the mean
+/// triangles per non-empty tile of the sample.
 fn estimate<M: Measure>(scene: &M, p: &Params) -> Result<(u64, f64), M::Error> {
     let sample = scene.sample(p, SAMPLE_DIRECTIONS)?;
     let stats = &sample.statistics;
