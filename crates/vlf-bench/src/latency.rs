@@ -53,6 +53,38 @@ pub fn chase(bytes: u64) -> anyhow::Result<f64> {
     Ok(crate::median(&mut times))
 }
 
+/// Steps of [`core_probe_ns`]'s computation per timed pass.
+const PROBE_STEPS: u64 = 50_000;
+
+/// How fast this core computes right now: the median nanoseconds per step, over three passes, of a
+/// fixed computation of eight independent integer streams and four floating-point ones (about 60
+/// independent operations a step, nothing from memory). On a virtual machine the host can lend
+/// the physical core to someone else for seconds at a time; this computation, which keeps the core's
+/// units as busy as a field query does, then slows down with the queries, so that a timed round
+/// can be told to have fallen in such a spell (`docs/benchmarks/where-the-time-goes.md`,
+/// 2026-12-07 08:15: in them the field lost 25–45% of its speed and Embree 10–25%).
+pub fn core_probe_ns() -> f64 {
+    let mut times = Vec::with_capacity(3);
+    let mut state = [0x9e37_79b9_7f4a_7c15u64, 2, 3, 4, 5, 6, 7, 8];
+    let mut acc = [1.0f64; 4];
+    for _ in 0..3 {
+        let start = Instant::now();
+        for _ in 0..PROBE_STEPS {
+            for x in state.iter_mut() {
+                *x ^= *x << 13;
+                *x ^= *x >> 7;
+                *x ^= *x << 17;
+            }
+            for (a, x) in acc.iter_mut().zip(state) {
+                *a = *a * 0.999_999 + (x & 0xff) as f64;
+            }
+        }
+        times.push(start.elapsed().as_secs_f64() * 1e9 / PROBE_STEPS as f64);
+        std::hint::black_box((&mut state, &mut acc));
+    }
+    crate::median(&mut times)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -63,5 +95,11 @@ mod tests {
         assert!(ns.is_finite() && ns > 0.0, "{ns}");
         // A buffer smaller than a line still holds one line, which points at itself.
         assert!(chase(8).expect("one line") > 0.0);
+    }
+
+    #[test]
+    fn the_core_probe_takes_a_positive_finite_time() {
+        let ns = core_probe_ns();
+        assert!(ns.is_finite() && ns > 0.0, "{ns}");
     }
 }

@@ -99,31 +99,38 @@ pub fn time_set(c: &dyn Contestant, set: &RaySet, pool: &rayon::ThreadPool, repe
 /// `repeats` rounds in which each contestant runs once, in turn. A slow spell of the machine (a
 /// neighbour on the host, a frequency change) then falls on every contestant alike instead of on
 /// whichever was running, and run `k` of one contestant can be paired with run `k` of another
-/// ([`report::ratio`] takes the median of those paired ratios). Returns each contestant's median
-/// and runs, in seconds, in `all`'s order.
+/// ([`report::ratio`] takes the median of those paired ratios). Before each round every thread of
+/// the pool times [`latency::core_probe_ns`], and the round keeps the slowest: how fast the cores
+/// computed then, which tells the rounds that fell in one of the host's slow spells (a pair of
+/// runs in one cancels the spell only partly: the field loses more speed in it than Embree).
+/// Returns each contestant's median and runs, in seconds, in `all`'s order, and the rounds' probes.
 pub fn time_round_robin(
     all: &[&dyn Contestant],
     set: &RaySet,
     pool: &rayon::ThreadPool,
     repeats: usize,
-) -> Vec<(f64, Vec<f64>)> {
+) -> (Vec<(f64, Vec<f64>)>, Vec<f64>) {
     let mut closest: Vec<Option<PeerHit>> = vec![None; set.rays.len()];
     let mut any = vec![false; set.rays.len()];
     for c in all {
         run_once(*c, set, pool, &mut closest, &mut any);
     }
     let mut runs = vec![Vec::with_capacity(repeats.max(1)); all.len()];
+    let mut probes = Vec::with_capacity(repeats.max(1));
     for _ in 0..repeats.max(1) {
+        probes.push(pool.broadcast(|_| latency::core_probe_ns()).into_iter().fold(0.0, f64::max));
         for (c, r) in all.iter().zip(&mut runs) {
             r.push(run_once(*c, set, pool, &mut closest, &mut any));
         }
     }
-    runs.into_iter()
+    let timed = runs
+        .into_iter()
         .map(|r| {
             let mut sorted = r.clone();
             (median(&mut sorted), r)
         })
-        .collect()
+        .collect();
+    (timed, probes)
 }
 
 fn pools(threads: &[usize]) -> anyhow::Result<Vec<(usize, rayon::ThreadPool)>> {
@@ -236,7 +243,7 @@ pub fn run_scene(spec: &SceneSpec, cfg: &PeersConfig) -> anyhow::Result<SceneRes
         let mut speeds = Vec::new();
         for (threads, pool) in &pools {
             let load = load_average();
-            let timed = time_round_robin(&all, set, pool, cfg.repeats);
+            let (timed, core_probe_ns) = time_round_robin(&all, set, pool, cfg.repeats);
             for (c, (median_s, runs_s)) in all.iter().zip(timed) {
                 let mrays_per_s = set.rays.len() as f64 / median_s / 1e6;
                 note(
@@ -250,6 +257,7 @@ pub fn run_scene(spec: &SceneSpec, cfg: &PeersConfig) -> anyhow::Result<SceneRes
                     runs_s,
                     mrays_per_s,
                     load,
+                    core_probe_ns: core_probe_ns.clone(),
                 });
             }
         }

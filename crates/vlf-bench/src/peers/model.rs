@@ -58,6 +58,11 @@ pub struct Speed {
     pub mrays_per_s: f64,
     /// The 1-minute load average when the measurement started.
     pub load: f64,
+    /// Before each timed round, the slowest of the pool's threads on `latency::core_probe_ns`
+    /// (nanoseconds per step; the same for every contestant of the round). Empty in reports
+    /// written before it was recorded.
+    #[serde(default)]
+    pub core_probe_ns: Vec<f64>,
 }
 
 /// One ray set of one scene.
