@@ -593,8 +593,9 @@ pub fn ratio(set: &SetResult, a: &str, b: &str, threads: usize) -> Option<f64> {
 
 /// A round began in one of the host's slow spells if the core probe before it
 /// ([`crate::latency::core_probe_ns`]) took at least this many times the scene's fastest probe at
-/// the same thread count. In the spells measured on 2026-12-07 the probe's kind of work ran 25–60%
-/// slower; outside them, the probe varies by a few per cent.
+/// the same thread count. In the spells measured on 2026-12-07 (`examples/core_probe.rs`, one
+/// thread) the probe ran about 20% slower and up to 2.3 times; outside them its fastest was also
+/// its median.
 pub const SLOW_PROBE: f64 = 1.10;
 
 /// The fastest core probe recorded by any of a scene's `sets` at `threads`.
