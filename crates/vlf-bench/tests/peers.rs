@@ -70,7 +70,7 @@ fn every_contestant_answers_and_the_exact_ones_match_the_brute_force() {
         assert!(set.speeds.iter().all(|s| s.runs_s.len() == 3), "{:?}", set.speeds);
         for c in &names[1..] {
             for t in [1, 2] {
-                let r = vlf_bench::peers::report::paired_ratios(set, "field", c, t).unwrap();
+                let r = vlf_bench::peers::rounds::paired_ratios(set, "field", c, t).unwrap();
                 assert_eq!(r.len(), 3);
                 assert!(r.iter().all(|x| x.is_finite() && *x > 0.0), "{c}: {r:?}");
             }

@@ -21,6 +21,7 @@ pub mod model;
 pub mod obvhs;
 pub mod rays;
 pub mod report;
+pub mod rounds;
 pub mod scenes;
 
 use crate::latency;
@@ -99,7 +100,7 @@ pub fn time_set(c: &dyn Contestant, set: &RaySet, pool: &rayon::ThreadPool, repe
 /// `repeats` rounds in which each contestant runs once, in turn. A slow spell of the machine (a
 /// neighbour on the host, a frequency change) then falls on every contestant alike instead of on
 /// whichever was running, and run `k` of one contestant can be paired with run `k` of another
-/// ([`report::ratio`] takes the median of those paired ratios). Before each round every thread of
+/// ([`rounds::ratio`] takes the median of those paired ratios). Before each round every thread of
 /// the pool times [`latency::core_probe_ns`], and the round keeps the slowest: how fast the cores
 /// computed then, which tells the rounds that fell in one of the host's slow spells (a pair of
 /// runs in one cancels the spell only partly: the field loses more speed in it than Embree).
