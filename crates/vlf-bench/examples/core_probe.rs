@@ -21,10 +21,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         return Err(usage.into());
     };
     let field = Field::open(path)?;
-    let tris: Vec<[[f32; 3]; 3]> = (0..field.triangle_count())
-        .map(|i| field.triangle(i).expect("below the count").map(|v| v.map(|c| c as f32)))
-        .collect();
-    let embree = EmbreeContestant::build(&tris).map_err(|e| e.to_string())?;
+    let embree = EmbreeContestant::over_field(&field).map_err(|e| e.to_string())?;
     let bytes = std::fs::read(rays)?;
     let rays = Ray::from_records(&bytes).ok_or("RAYS: not a whole number of 32-byte rays")?;
     for _ in 0..samples.parse::<usize>()? {

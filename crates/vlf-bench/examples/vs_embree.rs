@@ -26,10 +26,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     if rounds == 0 {
         return Err("ROUNDS must be at least 1".into());
     }
-    let tris: Vec<[[f32; 3]; 3]> = (0..field.triangle_count())
-        .map(|i| field.triangle(i).expect("below the count").map(|v| v.map(|c| c as f32)))
-        .collect();
-    let embree = EmbreeContestant::build(&tris).map_err(|e| e.to_string())?;
+    let embree = EmbreeContestant::over_field(&field).map_err(|e| e.to_string())?;
     for set in &args[2..] {
         let bytes = std::fs::read(set)?;
         let rays = match Ray::from_records(&bytes) {

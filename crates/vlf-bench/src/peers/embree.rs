@@ -49,6 +49,16 @@ unsafe impl Send for EmbreeContestant {}
 unsafe impl Sync for EmbreeContestant {}
 
 impl EmbreeContestant {
+    /// [`Self::build`] over a field's own triangles, in world coordinates rounded to f32 (its stored
+    /// vertices plus its origin), so that triangle ids agree with the field's: what the examples
+    /// that time the two on ray files build.
+    pub fn over_field(field: &vlf_runtime::Field) -> anyhow::Result<EmbreeContestant> {
+        let tris: Vec<Tri> = (0..field.triangle_count())
+            .map(|i| field.triangle(i).expect("below the count").map(|v| v.map(|c| c as f32)))
+            .collect();
+        Self::build(&tris)
+    }
+
     /// A default device (`rtcNewDevice(NULL)`: all hardware threads build) and the scene of `tris`.
     /// The build time covers filling the buffers and `rtcCommitScene`, not creating the device.
     pub fn build(tris: &[Tri]) -> anyhow::Result<EmbreeContestant> {
