@@ -253,9 +253,32 @@ impl<'a> FieldView<'a> {
     }
 
     /// The closest hit of a ray given relative to `origin`, with the triangles read through
-    /// `tris`: steps 1 to 5, compiled for AVX2 when the CPU has it.
+    /// `tris`: steps 1 to 5, compiled for the widest instruction set the CPU has
+    /// ([`Self::dispatch`]). A function of its own so that profiles (and
+    /// `docs/benchmarks/against-embree.sh`) can count the query's instructions by its name.
     #[inline(never)]
     fn closest_with(
+        &self,
+        ray: &Ray,
+        origin: [f64; 3],
+        tris: &impl Triangles,
+        counter: &mut impl Counter,
+    ) -> Option<Hit> {
+        self.dispatch::<ClosestQuery>(ray, origin, tris, counter)
+    }
+
+    /// The first hit found of a ray given relative to `origin`, with the triangles read through
+    /// `tris`, compiled as [`Self::closest_with`] is.
+    #[inline(never)]
+    fn any_with(&self, ray: &Ray, origin: [f64; 3], tris: &impl Triangles, counter: &mut impl Counter) -> Option<Hit> {
+        self.dispatch::<AnyQuery>(ray, origin, tris, counter)
+    }
+
+    /// Runs the query `Q` compiled for the view's instruction set: a test and a call. (The
+    /// baseline body is a function of its own too: inlined here, every query paid its stack
+    /// frame, 2 KiB, and six register saves before calling the AVX2 body, 14 instructions a ray.)
+    #[inline(always)]
+    fn dispatch<Q: Query>(
         &self,
         ray: &Ray,
         origin: [f64; 3],
@@ -265,34 +288,31 @@ impl<'a> FieldView<'a> {
         #[cfg(target_arch = "x86_64")]
         match self.isa {
             // SAFETY: `Avx512` exists only if the CPU supports AVX-512 F, VL, BW and DQ and AVX2
-            // (`Avx512::detect`), which is what `closest_avx512` is compiled for; BMI1, BMI2,
-            // LZCNT and POPCNT come with every CPU that has AVX2 (x86-64-v3).
-            Tier::Avx512(isa) => return unsafe { self.closest_avx512(isa, ray, origin, tris, counter) },
+            // (`Avx512::detect`), which is what `run_avx512` is compiled for; BMI1, BMI2, LZCNT
+            // and POPCNT come with every CPU that has AVX2 (x86-64-v3).
+            Tier::Avx512(isa) => return unsafe { self.run_avx512::<Q>(isa, ray, origin, tris, counter) },
             // SAFETY: `Avx2` exists only if the CPU supports AVX2 (`Avx2::detect`), which is what
-            // `closest_avx2` is compiled for, with BMI1, BMI2, LZCNT and POPCNT as above.
-            Tier::Avx2(isa) => return unsafe { self.closest_avx2(isa, ray, origin, tris, counter) },
+            // `run_avx2` is compiled for, with BMI1, BMI2, LZCNT and POPCNT as above.
+            Tier::Avx2(isa) => return unsafe { self.run_avx2::<Q>(isa, ray, origin, tris, counter) },
             Tier::Baseline => {}
         }
-        self.closest_baseline(ray, origin, tris, counter)
+        self.run_baseline::<Q>(ray, origin, tris, counter)
     }
 
-    /// The baseline body of [`Self::closest_with`], kept out of it so that the dispatch compiles
-    /// to a test and a call: with this body inlined there, every query paid its stack frame
-    /// (2 KiB) and six register saves before calling the AVX2 body, 14 instructions a ray.
     #[inline(never)]
-    fn closest_baseline(
+    fn run_baseline<Q: Query>(
         &self,
         ray: &Ray,
         origin: [f64; 3],
         tris: &impl Triangles,
         counter: &mut impl Counter,
     ) -> Option<Hit> {
-        self.closest_body(Baseline, ray, origin, tris, counter)
+        Q::run(self, Baseline, ray, origin, tris, counter)
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt,avx512f,avx512vl,avx512bw,avx512dq")]
-    fn closest_avx512(
+    fn run_avx512<Q: Query>(
         &self,
         isa: Avx512,
         ray: &Ray,
@@ -300,12 +320,12 @@ impl<'a> FieldView<'a> {
         tris: &impl Triangles,
         counter: &mut impl Counter,
     ) -> Option<Hit> {
-        self.closest_body(isa, ray, origin, tris, counter)
+        Q::run(self, isa, ray, origin, tris, counter)
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt")]
-    fn closest_avx2(
+    fn run_avx2<Q: Query>(
         &self,
         isa: Avx2,
         ray: &Ray,
@@ -313,107 +333,7 @@ impl<'a> FieldView<'a> {
         tris: &impl Triangles,
         counter: &mut impl Counter,
     ) -> Option<Hit> {
-        self.closest_body(isa, ray, origin, tris, counter)
-    }
-
-    #[inline(always)]
-    fn closest_body(
-        &self,
-        isa: impl Isa,
-        ray: &Ray,
-        origin: [f64; 3],
-        tris: &impl Triangles,
-        counter: &mut impl Counter,
-    ) -> Option<Hit> {
-        let setup = self.setup(ray, origin)?;
-        counter.ray();
-        let mut search = ClosestSearch { isa, ray: TriRay::relative(ray, origin), tris, best: Closest::new(ray.tmax) };
-        trace(&self.reader, &self.grid, &setup, &mut search, counter);
-        search.best.hit
-    }
-
-    /// The first hit found of a ray given relative to `origin`, with the triangles read through
-    /// `tris`, compiled for AVX2 when the CPU has it.
-    #[inline(never)]
-    fn any_with(&self, ray: &Ray, origin: [f64; 3], tris: &impl Triangles, counter: &mut impl Counter) -> Option<Hit> {
-        #[cfg(target_arch = "x86_64")]
-        match self.isa {
-            // SAFETY: as in `closest_with`.
-            Tier::Avx512(isa) => return unsafe { self.any_avx512(isa, ray, origin, tris, counter) },
-            // SAFETY: as in `closest_with`.
-            Tier::Avx2(isa) => return unsafe { self.any_avx2(isa, ray, origin, tris, counter) },
-            Tier::Baseline => {}
-        }
-        self.any_baseline(ray, origin, tris, counter)
-    }
-
-    /// The baseline body of [`Self::any_with`], apart from it as for [`Self::closest_baseline`].
-    #[inline(never)]
-    fn any_baseline(
-        &self,
-        ray: &Ray,
-        origin: [f64; 3],
-        tris: &impl Triangles,
-        counter: &mut impl Counter,
-    ) -> Option<Hit> {
-        self.any_body(Baseline, ray, origin, tris, counter)
-    }
-
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt,avx512f,avx512vl,avx512bw,avx512dq")]
-    fn any_avx512(
-        &self,
-        isa: Avx512,
-        ray: &Ray,
-        origin: [f64; 3],
-        tris: &impl Triangles,
-        counter: &mut impl Counter,
-    ) -> Option<Hit> {
-        self.any_body(isa, ray, origin, tris, counter)
-    }
-
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt")]
-    fn any_avx2(
-        &self,
-        isa: Avx2,
-        ray: &Ray,
-        origin: [f64; 3],
-        tris: &impl Triangles,
-        counter: &mut impl Counter,
-    ) -> Option<Hit> {
-        self.any_body(isa, ray, origin, tris, counter)
-    }
-
-    #[inline(always)]
-    fn any_body(
-        &self,
-        isa: impl Isa,
-        ray: &Ray,
-        origin: [f64; 3],
-        tris: &impl Triangles,
-        counter: &mut impl Counter,
-    ) -> Option<Hit> {
-        let (setup, defer_origin) = self.setup(ray, origin)?.for_any_hit(ray.tmax as f64, self.grid.radius);
-        counter.ray();
-        let ray = TriRay::relative(ray, origin);
-        if defer_origin {
-            self.any_walk::<true>(AnySearch { isa, ray, tris, found: None }, &setup, counter)
-        } else {
-            self.any_walk::<false>(AnySearch { isa, ray, tris, found: None }, &setup, counter)
-        }
-    }
-
-    /// Runs `search` over the walk of `setup`; the first hit found.
-    #[inline(always)]
-    fn any_walk<'t, const DEFER: bool>(
-        &self,
-        mut search: AnySearch<'t, impl Isa, impl Triangles + 't, DEFER>,
-        setup: &Setup,
-        counter: &mut impl Counter,
-    ) -> Option<Hit> {
-        trace(&self.reader, &self.grid, setup, &mut search, counter);
-        search.found
+        Q::run(self, isa, ray, origin, tris, counter)
     }
 
     /// [`Self::closest_hit_local`] with the triangles read through `tris` instead of the field's
@@ -454,6 +374,77 @@ impl<'a> FieldView<'a> {
             visit(&|t_far| leaf.passing(t_far, &[]), leaf.exit_t)
         });
     }
+}
+
+/// A single-ray query, steps 1 to 5 for one instruction set: what [`FieldView::dispatch`] runs.
+trait Query {
+    fn run<'t>(
+        view: &FieldView<'_>,
+        isa: impl Isa,
+        ray: &Ray,
+        origin: [f64; 3],
+        tris: &'t (impl Triangles + 't),
+        counter: &mut impl Counter,
+    ) -> Option<Hit>;
+}
+
+/// The closest hit ([`FieldView::closest_hit`]).
+struct ClosestQuery;
+
+impl Query for ClosestQuery {
+    #[inline(always)]
+    fn run<'t>(
+        view: &FieldView<'_>,
+        isa: impl Isa,
+        ray: &Ray,
+        origin: [f64; 3],
+        tris: &'t (impl Triangles + 't),
+        counter: &mut impl Counter,
+    ) -> Option<Hit> {
+        let setup = view.setup(ray, origin)?;
+        counter.ray();
+        let mut search = ClosestSearch { isa, ray: TriRay::relative(ray, origin), tris, best: Closest::new(ray.tmax) };
+        trace(&view.reader, &view.grid, &setup, &mut search, counter);
+        search.best.hit
+    }
+}
+
+/// The first hit found ([`FieldView::any_hit`]); a segment that leaves the scene is walked from
+/// its far end, and a segment that starts inside puts off its origin leaf
+/// ([`crate::walk::Setup::for_any_hit`]).
+struct AnyQuery;
+
+impl Query for AnyQuery {
+    #[inline(always)]
+    fn run<'t>(
+        view: &FieldView<'_>,
+        isa: impl Isa,
+        ray: &Ray,
+        origin: [f64; 3],
+        tris: &'t (impl Triangles + 't),
+        counter: &mut impl Counter,
+    ) -> Option<Hit> {
+        let (setup, defer_origin) = view.setup(ray, origin)?.for_any_hit(ray.tmax as f64, view.grid.radius);
+        counter.ray();
+        let ray = TriRay::relative(ray, origin);
+        if defer_origin {
+            any_walk::<true>(view, AnySearch { isa, ray, tris, found: None }, &setup, counter)
+        } else {
+            any_walk::<false>(view, AnySearch { isa, ray, tris, found: None }, &setup, counter)
+        }
+    }
+}
+
+/// Runs `search` over the walk of `setup`; the first hit found.
+#[inline(always)]
+fn any_walk<'t, const DEFER: bool>(
+    view: &FieldView<'_>,
+    mut search: AnySearch<'t, impl Isa, impl Triangles + 't, DEFER>,
+    setup: &Setup,
+    counter: &mut impl Counter,
+) -> Option<Hit> {
+    trace(&view.reader, &view.grid, setup, &mut search, counter);
+    search.found
 }
 
 /// The refs of `leaf` the closest-hit search tests: those whose boxes meet the ray over the
