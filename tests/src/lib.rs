@@ -70,7 +70,8 @@ pub fn oracle_triangle(ray: &Ray, tri: &[[f32; 3]; 3], origin: [f64; 3]) -> Opti
         return None;
     }
     let t = dot(e2, q) * inv;
-    if t < ray.tmin as f64 || t > ray.tmax as f64 {
+    // A hit is reported in f32: one past the largest finite f32 is none (`vlf_geom::T_LIMIT`).
+    if t < ray.tmin as f64 || t > (ray.tmax as f64).min(f32::MAX as f64) {
         return None;
     }
     Some((t, u.min(w).min(1.0 - u - w)))
@@ -141,6 +142,11 @@ fn on_plane(ray: &Ray, t: f64, tri: &[[f32; 3]; 3], origin: [f64; 3]) -> bool {
 /// edges: within 16 f32 ulps of the problem's magnitude (origin, hit point and vertices), where
 /// an f32 and an f64 intersector may legitimately disagree.
 pub fn grazes(ray: &Ray, t: f64, prim: u32, tris: &[[[f32; 3]; 3]], origin: [f64; 3]) -> bool {
+    // A hit at an infinite `t` has no point to measure (every distance there is infinite or NaN,
+    // which would pass for grazing): it is no hit at all (`vlf_geom::T_LIMIT`).
+    if !t.is_finite() {
+        return false;
+    }
     let tri = &tris[prim as usize];
     let p = local_at(ray, t, origin);
     edge_distance(p, tri) <= 16.0 * f32::EPSILON as f64 * magnitude(ray, p, tri, origin)
@@ -432,6 +438,22 @@ pub fn ray_families(field: &Field, per_family: usize, seed: u64) -> Vec<(&'stati
         })
         .collect();
     fams.push(("aimed at vertices, edge midpoints and centroids", aimed));
+
+    // Directions so short that the hits lie at `t` from 10^36 to 10^40, on both sides of the
+    // largest finite f32, where a hit is no hit (`vlf_geom::T_LIMIT`): such rays once met two
+    // triangles at `t = ∞`, and the farther one won the tie.
+    let far: Vec<Ray> = (0..per_family / 4)
+        .map(|_| {
+            let t = &tris[(rng.next_u64() % tris.len() as u64) as usize];
+            let target: [f64; 3] = std::array::from_fn(|k| (t[0][k] + t[1][k] + t[2][k]) / 3.0);
+            let o = in_ball(&mut rng, c, 3.0 * r);
+            let d = sub(target, o);
+            let scale = 10f64.powf(-rng.range(36.0, 40.0));
+            Ray::new(to_f32(o), to_f32(d.map(|x| x * scale)))
+        })
+        .filter(Ray::is_valid)
+        .collect();
+    fams.push(("aimed with tiny directions: hits on both sides of the largest float", far));
 
     // What a renderer traces after a hit: rays leaving a point on a triangle, to a light (the
     // segment short of both ends, as shadow rays are) or in any direction (a bounce). Any-hit

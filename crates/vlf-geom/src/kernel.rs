@@ -235,7 +235,7 @@ impl TriRay {
         for id in ids {
             let Some(tri) = tris.vertices(id) else { continue };
             counter.test();
-            if let Some(h) = self.candidate(tri).and_then(|c| c.within(self.tmin, *tmax as f64)) {
+            if let Some(h) = self.candidate(tri).and_then(|c| c.within(self.tmin, (*tmax as f64).min(self.tmax))) {
                 found(Hit { t: h.t, prim: id, u: h.u, v: h.v }, tmax);
             }
         }
@@ -427,6 +427,39 @@ mod tests {
         assert_eq!(work.triangle_tests, 2);
         let short = TriRay::new(&Ray { tmax: 0.5, ..ray });
         assert_eq!(short.any_in(Baseline, &TRIS[..], [0, 1], &mut ()), None);
+    }
+
+    /// A hit whose `t` is past the largest finite f32 is no hit, on every path: before, a ray
+    /// with a tiny direction met both triangles at `t = ∞` and the farther one (the lower id)
+    /// won the tie.
+    #[test]
+    fn a_hit_past_the_largest_float_is_no_hit() {
+        // Triangles 1 and 0 lie at z = 1 and z = 2: t = 1 / d and 2 / d.
+        for (dz, want) in [(2e-39f32, None), (4e-39, Some(1)), (1.0, Some(1))] {
+            let ray = Ray::new([0.0, 0.0, 0.0], [0.0, 0.0, dz]);
+            assert!(ray.is_valid());
+            let tr = TriRay::new(&ray);
+            let mut best = Closest::new(ray.tmax);
+            tr.closest_in(Baseline, &TRIS[..], [0, 1, 2], &mut best, &mut ());
+            assert_eq!(best.hit.map(|h| h.prim), want, "closest, d = {dz:e}");
+            assert!(best.tmax.is_finite() || want.is_none(), "d = {dz:e}: t = {}", best.tmax);
+            let mut scalar = Closest::new(ray.tmax);
+            tr.closest_in_scalar(&TRIS[..], [0, 1, 2], &mut scalar, &mut ());
+            assert_eq!(scalar, best, "the scalar twin, d = {dz:e}");
+            // Any hit finds triangle 0 first when it counts, so it must skip it past the limit.
+            let any = tr.any_in(Baseline, &TRIS[..], [0, 1], &mut ()).map(|h| h.prim);
+            assert_eq!(any.is_some(), want.is_some(), "any, d = {dz:e}");
+            let mut all = Vec::new();
+            let mut tmax = f32::INFINITY;
+            tr.hits_in(&TRIS[..], [0, 1, 2], &mut tmax, &mut (), |h, _| all.push(h.prim));
+            let expect: Vec<u32> = match want {
+                None => vec![],
+                Some(_) if dz < 1.0 => vec![1],
+                Some(_) => vec![0, 1],
+            };
+            assert_eq!(all, expect, "all, d = {dz:e}");
+            assert_eq!(tr.intersect(TRIS[0][0], TRIS[0][1], TRIS[0][2], f32::INFINITY).is_some(), dz == 1.0);
+        }
     }
 
     #[test]

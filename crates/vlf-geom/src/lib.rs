@@ -23,7 +23,7 @@ pub use kernel::{Closest, Triangles};
 pub use lattice::Lattice;
 pub use ray::{Counter, Hit, Intersector, Ray, TraceStats};
 pub use simd::{Avx2, Avx512, Baseline, Isa, Tri};
-pub use triangle::{Candidate, TriHit, TriRay, is_degenerate};
+pub use triangle::{Candidate, T_LIMIT, TriHit, TriRay, is_degenerate};
 
 /// The reference intersector: every triangle, every ray, in id order, with the same leaf kernel
 /// as the accelerated paths. Slow on purpose; the baseline every fast path is tested against.

@@ -31,9 +31,15 @@ pub struct TriRay {
     pub(crate) sz: f64,
     /// The ray's `tmin`: hits before it are rejected.
     pub tmin: f64,
-    /// The ray's `tmax`: hits after it are rejected.
+    /// The ray's `tmax`, at most [`T_LIMIT`]: hits after it are rejected.
     pub tmax: f64,
 }
+
+/// The largest `t` a hit can have: the largest finite f32. A hit is reported in f32, and a ray
+/// whose direction is tiny against the distance to a triangle meets it at a `t` that rounds to
+/// infinity there; such a hit, like any beyond `tmax`, is not a hit (else the two triangles a
+/// ray meets past this limit would tie at `t = ∞`, and the farther one could win on its id).
+pub const T_LIMIT: f64 = f32::MAX as f64;
 
 /// The result of one test: parameter and barycentrics of `v1` and `v2`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -83,14 +89,14 @@ impl TriRay {
             sy: d[ky] * sz,
             sz,
             tmin: ray.tmin as f64,
-            tmax: ray.tmax as f64,
+            tmax: (ray.tmax as f64).min(T_LIMIT),
         }
     }
 
-    /// Tests one triangle; a hit must have `tmin ≤ t ≤ tmax`.
+    /// Tests one triangle; a hit must have `tmin ≤ t ≤ tmax` (and `t ≤` [`T_LIMIT`]).
     #[inline(always)]
     pub fn intersect(&self, v0: [f32; 3], v1: [f32; 3], v2: [f32; 3], tmax: f32) -> Option<TriHit> {
-        self.candidate(&[v0, v1, v2])?.within(self.tmin, tmax as f64)
+        self.candidate(&[v0, v1, v2])?.within(self.tmin, (tmax as f64).min(self.tmax))
     }
 
     /// The test of one triangle up to its range test: where the ray's line meets the triangle,
