@@ -502,7 +502,8 @@ const char *vlf_status_name(int32_t status);
  *
  * The string belongs to the library. It is valid until the next failing call on the same
  * thread, or until the thread exits; copy it to keep it. Successful calls leave it unchanged,
- * so read it right after a call returns an error.
+ * so read it right after a call returns an error. Calls made while the thread is exiting (from a
+ * thread-specific data destructor) keep no message: this then returns a fixed one saying so.
  */
 const char *vlf_last_error_message(void);
 
@@ -946,8 +947,9 @@ VlfStatus vlf_scene_remove_instance(struct VlfScene *scene, uint32_t instance);
  * memory: the file is not written. Ids already removed are skipped; `*removed` (if not NULL)
  * receives how many were removed now.
  *
- * Returns `VLF_OK`; `VLF_ERR_INVALID_ARGUMENT` for a field the scene lacks or an id out of range
- * (then nothing is removed); `VLF_ERR_NULL_ARGUMENT` (`ids` may be NULL when `n` is 0).
+ * Returns `VLF_OK`; `VLF_ERR_INVALID_ARGUMENT` for a field the scene lacks, an id out of range or
+ * a misaligned `removed` (then nothing is removed); `VLF_ERR_NULL_ARGUMENT` (`ids` may be NULL
+ * when `n` is 0).
  *
  * # Safety
  * `scene` must be NULL or a live handle used by no other call; `ids` must point to `n` ids;
@@ -965,7 +967,8 @@ VlfStatus vlf_scene_remove_triangles(struct VlfScene *scene,
  * receives how many were removed now.
  *
  * Returns `VLF_OK`; `VLF_ERR_INVALID_ARGUMENT` if no triangle comes from `name` (the message
- * lists some of the field's names) or the field is not the scene's; `VLF_ERR_NULL_ARGUMENT`.
+ * lists some of the field's names), the field is not the scene's or `removed` is misaligned
+ * (then nothing is removed); `VLF_ERR_NULL_ARGUMENT`.
  *
  * # Safety
  * `scene` must be NULL or a live handle used by no other call; `name` NULL or NUL-terminated;

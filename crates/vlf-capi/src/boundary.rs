@@ -46,8 +46,14 @@ thread_local! {
 pub(crate) fn set_last_error(message: String) {
     // A message never contains NUL, but a path could: show it rather than cut the message there.
     let message = CString::new(message.replace('\0', "\\0")).unwrap_or_default();
-    LAST_ERROR.with(|e| *e.borrow_mut() = message);
+    // Once the thread's locals are destroyed (a call from a pthread key destructor, as the thread
+    // exits), the message has nowhere to go: it is dropped, the status still tells the failure.
+    let _ = LAST_ERROR.try_with(|e| *e.borrow_mut() = message);
 }
+
+/// What `vlf_last_error_message` returns once the thread's locals are destroyed.
+pub(crate) const NO_MESSAGE_AT_EXIT: &std::ffi::CStr =
+    c"(no message: the call was made while its thread was exiting, after its messages were freed)";
 
 /// Runs the body of entry point `function`, turning its failure or a panic into a status and the
 /// thread's last error message.
@@ -101,6 +107,16 @@ pub(crate) unsafe fn out<'a, T>(p: *mut T, argument: &str) -> Result<&'a mut May
     // SAFETY: non-null and aligned, checked above; `MaybeUninit` asks nothing of the contents;
     // validity for writes is the caller's promise.
     Ok(unsafe { &mut *p.cast() })
+}
+
+/// [`out`] for an optional output: `None` if `p` is null, a failure if it is misaligned. Checked
+/// with the other arguments, before the call changes anything.
+///
+/// # Safety
+/// As for [`out`].
+pub(crate) unsafe fn optional_out<'a, T>(p: *mut T, argument: &str) -> Result<Option<&'a mut MaybeUninit<T>>, Failure> {
+    // SAFETY: the caller's promise, for a non-null `p`.
+    if p.is_null() { Ok(None) } else { unsafe { out(p, argument) }.map(Some) }
 }
 
 /// The field behind a handle, or a failure if it is null.

@@ -231,8 +231,9 @@ pub unsafe extern "C" fn vlf_scene_remove_instance(scene: *mut VlfScene, instanc
 /// memory: the file is not written. Ids already removed are skipped; `*removed` (if not NULL)
 /// receives how many were removed now.
 ///
-/// Returns `VLF_OK`; `VLF_ERR_INVALID_ARGUMENT` for a field the scene lacks or an id out of range
-/// (then nothing is removed); `VLF_ERR_NULL_ARGUMENT` (`ids` may be NULL when `n` is 0).
+/// Returns `VLF_OK`; `VLF_ERR_INVALID_ARGUMENT` for a field the scene lacks, an id out of range or
+/// a misaligned `removed` (then nothing is removed); `VLF_ERR_NULL_ARGUMENT` (`ids` may be NULL
+/// when `n` is 0).
 ///
 /// # Safety
 /// `scene` must be NULL or a live handle used by no other call; `ids` must point to `n` ids;
@@ -247,12 +248,12 @@ pub unsafe extern "C" fn vlf_scene_remove_triangles(
 ) -> VlfStatus {
     call("vlf_scene_remove_triangles", || {
         // SAFETY: the caller's promises.
-        let (scene, ids) = unsafe { (scene_mut(scene)?, slice_arg(ids, n, "ids")?) };
+        let (scene, ids, removed) =
+            unsafe { (scene_mut(scene)?, slice_arg(ids, n, "ids")?, optional_out(removed, "removed")?) };
         let id = field_id(scene, field)?;
         let now = scene.edit(id, |f| f.remove(ids)).expect("checked field")?;
-        if !removed.is_null() {
-            // SAFETY: the caller's promise.
-            unsafe { out(removed, "removed") }?.write(now);
+        if let Some(removed) = removed {
+            removed.write(now);
         }
         Ok(())
     })
@@ -263,7 +264,8 @@ pub unsafe extern "C" fn vlf_scene_remove_triangles(
 /// receives how many were removed now.
 ///
 /// Returns `VLF_OK`; `VLF_ERR_INVALID_ARGUMENT` if no triangle comes from `name` (the message
-/// lists some of the field's names) or the field is not the scene's; `VLF_ERR_NULL_ARGUMENT`.
+/// lists some of the field's names), the field is not the scene's or `removed` is misaligned
+/// (then nothing is removed); `VLF_ERR_NULL_ARGUMENT`.
 ///
 /// # Safety
 /// `scene` must be NULL or a live handle used by no other call; `name` NULL or NUL-terminated;
@@ -276,8 +278,8 @@ pub unsafe extern "C" fn vlf_scene_remove_object(
     removed: *mut u64,
 ) -> VlfStatus {
     call("vlf_scene_remove_object", || {
-        // SAFETY: the caller's promise.
-        let scene = unsafe { scene_mut(scene) }?;
+        // SAFETY: the caller's promises.
+        let (scene, removed) = unsafe { (scene_mut(scene)?, optional_out(removed, "removed")?) };
         if name.is_null() {
             return Err(Failure::null("name"));
         }
@@ -287,9 +289,8 @@ pub unsafe extern "C" fn vlf_scene_remove_object(
             .map_err(|_| Failure::invalid("argument `name` is not valid UTF-8".into()))?;
         let id = field_id(scene, field)?;
         let now = scene.edit(id, |f| f.remove_object(Object::Name(name))).expect("checked field")?;
-        if !removed.is_null() {
-            // SAFETY: the caller's promise.
-            unsafe { out(removed, "removed") }?.write(now);
+        if let Some(removed) = removed {
+            removed.write(now);
         }
         Ok(())
     })

@@ -97,11 +97,12 @@ pub extern "C" fn vlf_status_name(status: i32) -> *const c_char {
 ///
 /// The string belongs to the library. It is valid until the next failing call on the same
 /// thread, or until the thread exits; copy it to keep it. Successful calls leave it unchanged,
-/// so read it right after a call returns an error.
+/// so read it right after a call returns an error. Calls made while the thread is exiting (from a
+/// thread-specific data destructor) keep no message: this then returns a fixed one saying so.
 #[unsafe(no_mangle)]
 pub extern "C" fn vlf_last_error_message() -> *const c_char {
     // The CString's heap buffer stays put until the next `set_last_error` on this thread.
-    LAST_ERROR.with(|e| e.borrow().as_ptr())
+    LAST_ERROR.try_with(|e| e.borrow().as_ptr()).unwrap_or(boundary::NO_MESSAGE_AT_EXIT.as_ptr())
 }
 
 /// Opens the field file at `path` (a NUL-terminated path in the platform's encoding) by

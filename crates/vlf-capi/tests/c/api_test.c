@@ -136,6 +136,38 @@ static void *trace_worker(void *arg) {
     return NULL;
 }
 
+/* A call made from a thread-specific data destructor, as its thread exits, after the library's
+ * own per-thread message is freed: a status and a fixed message, never an abort. */
+static pthread_key_t exit_key;
+static VlfStatus at_exit_status = VLF_OK;
+static int at_exit_message = 0;
+
+static void at_thread_exit(void *value) {
+    VlfField *f = NULL;
+    (void)value;
+    at_exit_status = vlf_open_path("/nonexistent/at-thread-exit.vlf", &f);
+    at_exit_message = strstr(vlf_last_error_message(), "exiting") != NULL;
+}
+
+static void *exiting_thread(void *arg) {
+    VlfField *f = NULL;
+    (void)arg;
+    /* A failure first, so that the thread holds a message the library frees as it exits. */
+    if (vlf_open_path("/nonexistent/first.vlf", &f) == VLF_ERR_IO) {
+        pthread_setspecific(exit_key, (void *)&exit_key);
+    }
+    return NULL;
+}
+
+static void calls_as_a_thread_exits(void) {
+    pthread_t t;
+    CHECK(pthread_key_create(&exit_key, at_thread_exit) == 0);
+    CHECK(pthread_create(&t, NULL, exiting_thread, NULL) == 0);
+    CHECK(pthread_join(t, NULL) == 0);
+    CHECK(at_exit_status == VLF_ERR_IO && at_exit_message);
+    pthread_key_delete(exit_key);
+}
+
 /* Format version, bounds, parameters and packing of FIELD (argv as main's). */
 static void about_the_field(const VlfField *field, char **argv) {
     uint16_t major = 0, minor = 0;
@@ -468,6 +500,7 @@ int main(int argc, char **argv) {
         CHECK(message_has("vlf_triangle_count: argument `field` is null"));
     }
 
+    calls_as_a_thread_exits();
     about_the_field(field, argv);
     scene(argv);
     packed_with_a_cap(argv);

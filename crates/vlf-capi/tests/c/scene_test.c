@@ -120,7 +120,13 @@ int main(int argc, char **argv) {
     CHECK(vlf_scene_set_transform(scene, a, up) == VLF_OK);
     CHECK(vlf_scene_set_mask(scene, b, 3) == VLF_OK);
     const uint32_t ids[3] = {0, 1, 1};
-    uint64_t removed = 0;
+    uint64_t removed = 0, storage[2] = {0, 0};
+    /* A misaligned `removed` fails before anything is removed: the next call still removes two. */
+    uint64_t *misaligned = (uint64_t *)(void *)((char *)storage + 1);
+    CHECK(vlf_scene_remove_triangles(scene, id, ids, 3, misaligned) == VLF_ERR_INVALID_ARGUMENT &&
+          message_has("not aligned"));
+    CHECK(vlf_scene_remove_object(scene, id, "nothing", misaligned) == VLF_ERR_INVALID_ARGUMENT &&
+          message_has("not aligned"));
     CHECK(vlf_scene_remove_triangles(scene, id, ids, 3, &removed) == VLF_OK && removed == 2);
     const uint32_t out_of_range[1] = {count + 5};
     CHECK(vlf_scene_remove_triangles(scene, id, out_of_range, 1, NULL) == VLF_ERR_INVALID_ARGUMENT);
