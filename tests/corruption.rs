@@ -224,3 +224,25 @@ fn borrowed_bytes_are_queried_in_place_when_aligned_and_refused_when_not() {
     let hit = view.closest_hit(&vlf_runtime::Ray::new([0.5, 0.5, 10.0], [0.0, 0.0, -1.0])).unwrap();
     assert_eq!(hit.t, 7.0);
 }
+
+/// Only a regular file is mapped: a directory is named as one, and a pipe is refused at once
+/// (opening it would wait for a writer, forever if none comes).
+#[test]
+fn a_directory_or_a_pipe_is_refused_at_open_by_what_it_is() {
+    let dir = tempfile::tempdir().unwrap();
+    let err = Field::open(dir.path()).err().expect("a directory opened");
+    assert!(err.to_string().contains("is a directory"), "{err}");
+    #[cfg(unix)]
+    {
+        let fifo = dir.path().join("pipe.vlf");
+        let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+        if made.is_ok_and(|s| s.success()) {
+            let (tx, rx) = std::sync::mpsc::channel();
+            let path = fifo.clone();
+            std::thread::spawn(move || tx.send(Field::open(&path).err().map(|e| e.to_string())));
+            let err = rx.recv_timeout(std::time::Duration::from_secs(20)).expect("opening a pipe hangs");
+            let err = err.expect("a pipe opened");
+            assert!(err.contains("not a regular file") && err.contains("pipe.vlf"), "{err}");
+        }
+    }
+}

@@ -83,6 +83,7 @@ use vlf_format::{AlignedBytes, NO_INDEX};
 pub use all_hits::HitLists;
 pub use batch::Interleave;
 pub use open_error::OpenError;
+use open_error::regular_file;
 
 /// Rays per work item of the parallel batch queries.
 #[cfg(feature = "rayon")]
@@ -232,8 +233,13 @@ impl OpenOptions {
     pub fn open(&self, path: impl AsRef<Path>) -> Result<Field, OpenError> {
         let path = path.as_ref();
         let io = |error| OpenError::Io { path: path.to_owned(), error };
+        // Only a regular file can be mapped. Checked before opening too: opening a pipe waits for
+        // a writer, forever if none comes.
+        regular_file(&std::fs::metadata(path).map_err(io)?).map_err(io)?;
         let file = File::open(path).map_err(io)?;
-        let len = file.metadata().map_err(io)?.len();
+        let meta = file.metadata().map_err(io)?;
+        regular_file(&meta).map_err(io)?;
+        let len = meta.len();
         if len < vlf_format::HEADER_SIZE as u64 {
             // Too short to map usefully; let the reader name the problem.
             let mut bytes = Vec::new();

@@ -44,3 +44,19 @@ impl OpenError {
         }
     }
 }
+
+/// `Ok` if `meta` is a regular file's, the only kind a field can be mapped from; else why not.
+pub(crate) fn regular_file(meta: &std::fs::Metadata) -> std::io::Result<()> {
+    if meta.is_file() {
+        return Ok(());
+    }
+    let (kind, what) = if meta.is_dir() {
+        (std::io::ErrorKind::IsADirectory, "it is a directory")
+    } else {
+        (
+            std::io::ErrorKind::InvalidInput,
+            "it is not a regular file (a pipe, socket or device cannot be mapped: read it into memory instead)",
+        )
+    };
+    Err(std::io::Error::new(kind, what))
+}
