@@ -3,29 +3,30 @@
 use pyo3::PyErr;
 use pyo3::create_exception;
 use pyo3::exceptions::{
-    PyFileNotFoundError, PyMemoryError, PyOSError, PyPermissionError, PyRuntimeError, PyValueError,
+    PyFileNotFoundError, PyIsADirectoryError, PyMemoryError, PyOSError, PyPermissionError, PyRuntimeError, PyValueError,
 };
 use std::io;
 use vlf_runtime::{FormatError, OpenError};
 
 create_exception!(
-    _vlf,
+    vlf,
     FieldError,
     PyValueError,
     "The bytes are not a valid visibility field (damaged, truncated, or not a field at all), or a packed field is over the size limit."
 );
 create_exception!(
-    _vlf,
+    vlf,
     BakeError,
     PyRuntimeError,
     "A bake failed: the mesh cannot be imported or the parameters cannot be met."
 );
 
 /// An I/O error as Python's own exception of its kind (`FileNotFoundError`, `PermissionError`,
-/// else `OSError`), with `message`.
+/// `IsADirectoryError`, else `OSError`), with `message`.
 pub fn io_error(kind: io::ErrorKind, message: String) -> PyErr {
     match kind {
         io::ErrorKind::NotFound => PyFileNotFoundError::new_err(message),
+        io::ErrorKind::IsADirectory => PyIsADirectoryError::new_err(message),
         io::ErrorKind::PermissionDenied => PyPermissionError::new_err(message),
         _ => PyOSError::new_err(message),
     }

@@ -7,6 +7,7 @@ use crate::rays::RayArgs;
 use crate::threads::Threads;
 use numpy::ndarray::{Array2, Array3};
 use numpy::{PyArray1, PyArray2, PyArray3};
+use pyo3::exceptions::PyMemoryError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 use rayon::prelude::*;
@@ -108,6 +109,26 @@ fn provenance_dict<'py>(py: Python<'py>, p: &Provenance<'_>) -> PyResult<Bound<'
     Ok(d)
 }
 
+/// The most bytes a query holds per ray: the ray (32), its hit (16) and the columns made of it
+/// (32).
+const BYTES_PER_RAY: usize = 80;
+
+/// A `MemoryError` if the arrays of a query on `n` rays cannot be allocated: checked before the
+/// work, so that a huge (say, broadcast) batch is refused instead of aborting the interpreter
+/// when an allocation fails midway.
+fn reserve_for(n: usize) -> PyResult<()> {
+    let too_much = || {
+        PyMemoryError::new_err(format!(
+            "{n} rays: a query holds about {BYTES_PER_RAY} bytes per ray ({:.3e} bytes in all), more than \
+             can be allocated; trace them in smaller batches",
+            n as f64 * BYTES_PER_RAY as f64
+        ))
+    };
+    let bytes = n.checked_mul(BYTES_PER_RAY).ok_or_else(too_much)?;
+    let mut probe: Vec<u8> = Vec::new();
+    probe.try_reserve_exact(bytes).map_err(|_| too_much())
+}
+
 impl Field {
     pub fn new(field: vlf_runtime::Field, path: Option<PathBuf>) -> Field {
         Field { field, path }
@@ -121,6 +142,7 @@ impl Field {
         threads: Option<usize>,
         query: impl FnOnce(&vlf_runtime::Field, &[vlf_runtime::Ray], bool) -> R + Send,
     ) -> PyResult<R> {
+        reserve_for(args.len())?;
         let pool = Threads::new(threads)?;
         let views = args.views();
         let field = &self.field;

@@ -5,7 +5,7 @@
 
 use crate::errors::value_error;
 use numpy::ndarray::{ArrayView1, ArrayView2};
-use numpy::{PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
+use numpy::{PyArray, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 use rayon::prelude::*;
@@ -41,6 +41,10 @@ impl<'py> Held<'py> {
         if shape[1] != 3 {
             return Err(value_error(format!("`{name}` must have shape (N, 3), not ({}, {})", shape[0], shape[1])));
         }
+        match &held {
+            Held::F32(a) => aligned(a, name)?,
+            Held::F64(a) => aligned(a, name)?,
+        }
         Ok(held)
     }
 
@@ -73,6 +77,24 @@ impl Vectors<'_> {
             Vectors::F32(a) => [a[[i, 0]], a[[i, 1]], a[[i, 2]]],
             Vectors::F64(a) => [a[[i, 0]] as f32, a[[i, 1]] as f32, a[[i, 2]] as f32],
         }
+    }
+}
+
+/// A `ValueError` unless `a`'s data and strides are aligned to its element type: numpy's views
+/// into packed records are not, and reading them in place would read the wrong bytes (the
+/// Python layer copies such arrays before they get here).
+fn aligned<T: numpy::Element, D: numpy::ndarray::Dimension>(a: &Bound<'_, PyArray<T, D>>, name: &str) -> PyResult<()> {
+    let size = std::mem::size_of::<T>() as isize;
+    let strides_ok = a.strides().iter().zip(a.shape()).all(|(&s, &n)| n <= 1 || s % size == 0);
+    let data_ok = a.len() == 0 || (a.data() as usize).is_multiple_of(std::mem::align_of::<T>());
+    if strides_ok && data_ok {
+        Ok(())
+    } else {
+        Err(value_error(format!(
+            "`{name}` is not aligned in memory (strides {:?} bytes for {size}-byte values): copy it first, \
+             e.g. with numpy.ascontiguousarray",
+            a.strides()
+        )))
     }
 }
 
@@ -118,6 +140,7 @@ impl<'py> RayArgs<'py> {
             if a.len() != origins.len() {
                 return Err(value_error(format!("`{name}` has {} values for {} rays", a.len(), origins.len())));
             }
+            aligned(&a, name)?;
             Ok(a)
         };
         let (tmin, tmax) = (bound(tmin, "tmin")?, bound(tmax, "tmax")?);

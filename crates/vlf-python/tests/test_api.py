@@ -252,3 +252,83 @@ def test_no_leak_over_a_long_loop(soup):
     gc.collect()
     grown = rss() - base
     assert grown < 8 << 20, f"resident memory grew by {grown} bytes"
+
+
+def test_views_into_packed_records_are_read_right(soup, rays):
+    # A field of a packed structured array is not aligned to its values: read in place, it was
+    # read at the wrong offsets. The wrapper copies it; the native module refuses it.
+    v, f, field = soup
+    o, d = rays
+    n = len(o)
+    want = field.closest_hits(o, d, tmin=np.linspace(0, 1, n, dtype=np.float32))
+    rec = np.zeros(n, dtype=[("tag", "u1"), ("o", "<f4", (3,)), ("d", "<f8", (3,)), ("tmin", "<f4")])
+    rec["o"], rec["d"], rec["tmin"] = o, d, np.linspace(0, 1, n, dtype=np.float32)
+    assert not rec["o"].flags.aligned and not rec["tmin"].flags.aligned
+    assert same(field.closest_hits(rec["o"], rec["d"], tmin=rec["tmin"]), want)
+    tmax = np.full(n, np.inf, dtype=np.float32)
+    with pytest.raises(ValueError, match="not aligned"):
+        field._inner.closest(rec["o"], d, rec["tmin"], tmax)
+
+
+def test_a_batch_too_large_for_memory_is_a_memory_error(soup):
+    v, f, field = soup
+    o = np.broadcast_to(np.zeros(3), (10**13, 3))  # no memory of its own
+    for query in (field.closest_hits, field.any_hits, field.hit_counts):
+        with pytest.raises(MemoryError, match="smaller batches"):
+            query(o, [0, 0, 1.0])
+
+
+@pytest.mark.skipif(not os.path.isdir("/proc/self/task"), reason="counts threads in /proc")
+def test_many_thread_counts_do_not_pile_up_threads(soup, rays):
+    v, f, field = soup
+    o, d = rays
+    before = len(os.listdir("/proc/self/task"))
+    for k in range(2, 40):
+        field.any_hits(o[:100], d[:100], threads=k)
+    # The every-core pool and the last sized pool at most (a dropped pool's threads end soon).
+    deadline = time.time() + 10
+    while len(os.listdir("/proc/self/task")) > before + 39 + os.cpu_count() and time.time() < deadline:
+        time.sleep(0.05)
+    assert len(os.listdir("/proc/self/task")) <= before + 39 + os.cpu_count()
+
+
+def test_errors_pickle_and_name_their_package():
+    import pickle
+
+    for error in (vlf.FieldError("bad bytes"), vlf.BakeError("bad mesh")):
+        back = pickle.loads(pickle.dumps(error))
+        assert type(back) is type(error) and back.args == error.args
+        assert type(error).__module__ == "vlf"
+
+
+def test_a_directory_or_a_pipe_is_refused_at_once(tmp_path):
+    with pytest.raises(IsADirectoryError, match="is a directory"):
+        vlf.open(tmp_path)
+    if hasattr(os, "mkfifo"):
+        fifo = tmp_path / "pipe.vlf"
+        os.mkfifo(fifo)
+        with pytest.raises(OSError, match="not a regular file"):
+            vlf.open(fifo)
+
+
+def test_a_hit_past_the_largest_float_is_no_hit(soup):
+    # A direction so short that every hit lies past the largest float32: no hit (it was reported
+    # at t = inf, on whichever triangle had the lower id).
+    v, f, field = soup
+    c, r = field.bounding_sphere
+    target = np.asarray(v)[np.asarray(f)[0]].mean(axis=0)
+    o = np.array([[target[0], target[1], c[2] + 3 * r]])
+    dist = o[0, 2] - target[2]
+    for length, hit in ((dist / 1e39, False), (1.0, True)):  # the hit at t = 1e39, then at t = dist
+        d = np.array([[0.0, 0.0, -length]])
+        h = field.closest_hits(o, d)
+        assert (h.triangle_id[0] >= 0) == hit and np.isfinite(h.t[0]) == hit
+        assert field.any_hits(o, d)[0] == hit and (field.hit_counts(o, d)[0] > 0) == hit
+
+
+def test_bytes_paths_are_paths(tmp_path):
+    v, f = random_soup(20, 5)
+    out = os.fsencode(tmp_path / "b.vlf")
+    field = vlf.bake_arrays(v, f, out, **SMALL)
+    assert field.path == os.fsdecode(out)
+    assert vlf.Field.open(out).triangle_count == field.triangle_count

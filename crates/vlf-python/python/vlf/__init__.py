@@ -122,6 +122,7 @@ def _vectors(a: Any, name: str) -> np.ndarray:
         a = a.astype(np.float64)
     elif not a.dtype.isnative:
         a = a.astype(a.dtype.newbyteorder("="))
+    a = _aligned(a)
     if a.ndim == 1 and a.shape[0] == 3:
         return a
     if a.ndim != 2 or a.shape[1] != 3:
@@ -147,8 +148,14 @@ def _rays(origins: Any, directions: Any, tmin: Any, tmax: Any):
     return o, d, _bound(tmin, n, "tmin"), _bound(tmax, n, "tmax")
 
 
+def _aligned(a: np.ndarray) -> np.ndarray:
+    """``a``, or an aligned copy of it: a view into packed records (a field of a structured array)
+    is not aligned to its values, and the native module reads arrays in place."""
+    return a if a.flags.aligned else np.array(a, order="C", copy=True)
+
+
 def _bound(value: Any, n: int, name: str) -> np.ndarray:
-    a = np.asarray(value, dtype=np.float32)
+    a = _aligned(np.asarray(value, dtype=np.float32))
     if a.ndim > 1 or (a.ndim == 1 and a.shape[0] != n):
         raise ValueError(f"`{name}` must be a number or have shape ({n},), not {a.shape}")
     return np.broadcast_to(a, (n,))
@@ -187,7 +194,7 @@ class Field:
         memory (refused over ``max_unpacked_bytes``). Raises ``FileNotFoundError`` (or another
         ``OSError``) if the file cannot be read and :class:`FieldError` if it is not a valid
         field."""
-        return cls(_vlf.Field.open(os.fspath(path), max_unpacked_bytes))
+        return cls(_vlf.Field.open(os.fsdecode(path), max_unpacked_bytes))
 
     @classmethod
     def from_bytes(cls, data: Union[bytes, bytearray, memoryview], *, max_unpacked_bytes: Optional[int] = None) -> "Field":
@@ -359,7 +366,7 @@ def _options(options: dict) -> dict:
         raise TypeError(f"unknown bake option(s) {', '.join(unknown)}; the options are {', '.join(_BAKE_OPTIONS)}")
     out = dict(options)
     if out.get("cache_dir") is not None:
-        out["cache_dir"] = os.fspath(out["cache_dir"])
+        out["cache_dir"] = os.fsdecode(out["cache_dir"])
     if out.get("threads") is not None:
         out["threads"] = _threads(out["threads"])
     out["no_cache"] = bool(out.get("no_cache", False))
@@ -390,8 +397,8 @@ def bake(inputs: Union[PathLike, Sequence[PathLike]], output: PathLike, **option
     """
     if isinstance(inputs, (str, bytes, os.PathLike)):
         inputs = [inputs]
-    paths = [os.fspath(p) for p in inputs]
-    inner, info = _vlf.bake_files(paths, os.fspath(output), **_options(options))
+    paths = [os.fsdecode(p) for p in inputs]
+    inner, info = _vlf.bake_files(paths, os.fsdecode(output), **_options(options))
     return Field(inner, info)
 
 
@@ -428,6 +435,6 @@ def bake_arrays(vertices: Any, faces: Any, output: Optional[PathLike] = None, *,
     names the source in the provenance. Options as :func:`bake`.
     """
     tris = _triangles(vertices, faces)
-    out = None if output is None else os.fspath(output)
+    out = None if output is None else os.fsdecode(output)
     inner, info = _vlf.bake_triangles(tris, str(name), out, **_options(options))
     return Field(inner, info)

@@ -2,6 +2,7 @@
 wrappers (`vlf.Field`, `vlf.bake`, `vlf.bake_arrays`): they normalise dtypes, broadcast the
 bounds and name the results."""
 
+import pathlib
 from typing import Optional, Sequence
 
 import numpy as np
@@ -21,7 +22,7 @@ class Field:
     @staticmethod
     def from_bytes(data: bytes, max_unpacked_bytes: Optional[int] = None) -> Field: ...
     @property
-    def path(self) -> Optional[str]: ...
+    def path(self) -> Optional[pathlib.Path]: ...
     @property
     def triangle_count(self) -> int: ...
     @property
