@@ -89,7 +89,7 @@ impl TriRay {
             sy: d[ky] * sz,
             sz,
             tmin: ray.tmin as f64,
-            tmax: (ray.tmax as f64).min(T_LIMIT),
+            tmax: ray.tmax.min(f32::MAX) as f64,
         }
     }
 
