@@ -23,4 +23,15 @@ pub enum BakeError {
         "the field outgrew the --max-bytes ceiling of {ceiling} bytes ({at_least} bytes or more after {baked} of {directions} directions); lower --directions or --tiles, or raise --max-bytes"
     )]
     OverBudget { ceiling: u64, at_least: u64, baked: usize, directions: usize },
+    /// A direction's buffers (a few bytes per tile) could not be allocated.
+    #[error(
+        "direction {direction} needs {bytes} bytes more for its {tiles} × {tiles} tiles, which cannot be allocated; lower --tiles or --threads"
+    )]
+    OutOfMemory { direction: usize, bytes: u64, tiles: u32 },
+    /// The bake's buffers for its tile grids would not fit the memory this machine has free
+    /// (checked before any work).
+    #[error(
+        "baking {tiles} × {tiles} tiles on {threads} thread(s) needs about {need} of memory (a direction's buffers take about {per_tile} bytes a tile on each thread), and {available} is available; lower --tiles or --threads"
+    )]
+    NotEnoughMemory { tiles: u32, threads: usize, per_tile: u64, need: String, available: String },
 }

@@ -28,6 +28,7 @@ pub mod generate;
 pub mod import;
 pub mod inspect;
 pub mod job;
+pub mod memory;
 pub mod order;
 pub mod pack;
 pub mod params;

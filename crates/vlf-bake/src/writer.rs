@@ -180,6 +180,7 @@ pub fn write_into(
 ) -> Result<Baked, BakeError> {
     let params = &choice.params;
     let io_err = |error: io::Error| BakeError::Io { path: path.to_path_buf(), error };
+    crate::memory::check(params.tiles, rayon::current_num_threads())?;
 
     let shared = shared_sections(prep, params, request);
     let direction_count = Lattice::new(params.lattice_n).direction_count() as u32;

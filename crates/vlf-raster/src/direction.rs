@@ -56,6 +56,28 @@ pub struct TooLarge {
     pub count: u64,
 }
 
+/// Why [`build_direction`] failed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DirectionError {
+    /// The blocks would not fit the format's 32-bit offsets.
+    TooLarge(TooLarge),
+    /// A buffer of `bytes` bytes (one entry or more per tile, so `n²`-sized) could not be
+    /// allocated: refused as an error, not an abort.
+    OutOfMemory { bytes: u64 },
+}
+
+impl From<TooLarge> for DirectionError {
+    fn from(e: TooLarge) -> Self {
+        DirectionError::TooLarge(e)
+    }
+}
+
+/// `v` cleared and holding room for `n` more items, or the bytes that could not be allocated.
+fn reserve<T>(v: &mut Vec<T>, n: usize) -> Result<(), DirectionError> {
+    v.clear();
+    v.try_reserve_exact(n).map_err(|_| DirectionError::OutOfMemory { bytes: (n * size_of::<T>()) as u64 })
+}
+
 /// Reusable buffers: one per thread.
 #[derive(Default)]
 pub struct Scratch {
@@ -184,7 +206,7 @@ pub fn build_direction(
     grid: &Grid,
     m: &[f64; 9],
     s: &mut Scratch,
-) -> Result<DirectionData, TooLarge> {
+) -> Result<DirectionData, DirectionError> {
     let n2 = grid.tiles as usize * grid.tiles as usize;
     s.projected.clear();
     s.projected.extend(vertices.iter().map(|&v| grid.project(m, v)));
@@ -196,7 +218,8 @@ pub fn build_direction(
     }
 
     // Counting sort by tile; stable, so each tile's entries stay in triangle-id order.
-    s.tile_start.clear();
+    // The `n²`-sized buffers are reserved fallibly: a grid too fine for memory is an error.
+    reserve(&mut s.tile_start, n2 + 1)?;
     s.tile_start.resize(n2 + 1, 0);
     for en in &s.entries {
         s.tile_start[en.tile as usize + 1] += 1;
@@ -207,7 +230,9 @@ pub fn build_direction(
     s.sorted.clear();
     s.sorted.resize(s.entries.len(), Entry::default());
     {
-        let mut cursor = s.tile_start.clone();
+        let mut cursor = Vec::new();
+        reserve(&mut cursor, n2 + 1)?;
+        cursor.extend_from_slice(&s.tile_start);
         for en in &s.entries {
             let slot = &mut cursor[en.tile as usize];
             s.sorted[*slot as usize] = *en;
@@ -215,11 +240,9 @@ pub fn build_direction(
         }
     }
 
-    let mut out = DirectionData {
-        tiles: Vec::with_capacity(n2),
-        words: Vec::with_capacity(s.entries.len() + n2),
-        stats: StatisticsRecord::zeroed_record(),
-    };
+    let mut out = DirectionData { tiles: Vec::new(), words: Vec::new(), stats: StatisticsRecord::zeroed_record() };
+    reserve(&mut out.tiles, n2)?;
+    reserve(&mut out.words, s.entries.len() + n2)?;
     out.stats.tile_count = n2 as u64;
     let sorted = std::mem::take(&mut s.sorted);
     for tile in 0..n2 {

@@ -14,5 +14,5 @@ pub mod direction;
 pub mod leaves;
 pub mod raster;
 
-pub use direction::{DirectionData, Entry, Grid, Scratch, TileBlock, TooLarge, build_direction};
+pub use direction::{DirectionData, DirectionError, Entry, Grid, Scratch, TileBlock, TooLarge, build_direction};
 pub use leaves::{DEFAULT_LEAF_SIZE, DEFAULT_MAX_DEPTH, DepthPolicy};
