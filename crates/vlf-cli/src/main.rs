@@ -4,9 +4,10 @@
 //! [`commands`] calls the libraries and prints.
 //!
 //! Exit codes: 0 success; 1 the command failed (one line on standard error says why); 2 the
-//! command line was invalid (a value out of range included); 130 and 143 interrupted by SIGINT
-//! and SIGTERM, after removing every temporary file ([`stop`]). A closed output pipe (`vlf-bake
-//! dump f | head`) counts as success.
+//! command line was invalid (a value out of range included); 130, 143 and 129 interrupted by
+//! SIGINT, SIGTERM and SIGHUP, after removing every temporary file ([`stop`]). A write past the
+//! file size limit (`ulimit -f`) is an ordinary failure, exit 1, not death by SIGXFSZ. A closed
+//! output pipe (`vlf-bake dump f | head`) counts as success.
 
 #![forbid(unsafe_code)]
 
@@ -26,7 +27,7 @@ use values::BadUsage;
 
 fn main() -> ExitCode {
     if let Err(e) = stop::install() {
-        eprintln!("error: cannot install the handler of SIGINT and SIGTERM: {e}");
+        eprintln!("error: cannot install the handler of SIGINT, SIGTERM, SIGHUP and SIGXFSZ: {e}");
         return ExitCode::FAILURE;
     }
     let cli = Cli::parse();

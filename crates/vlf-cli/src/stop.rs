@@ -1,9 +1,14 @@
 //! How the process stops when it is told to (SIGINT from Ctrl-C, SIGTERM from `kill`, a job
-//! scheduler or a container runtime) or when a thread panics (a bug): every temporary file it has
-//! open through `vlf_bake::atomic` is removed, so the outputs keep their previous contents and
-//! nothing is left beside them; then one line on standard error, and exit 130 (SIGINT), 143
-//! (SIGTERM) or 1 (a panic). SIGKILL cannot be caught: its leftover is removed by the next write of
-//! the same path (`docs/reliability.md`).
+//! scheduler or a container runtime, SIGHUP from a closed terminal) or when a thread panics (a
+//! bug): every temporary file it has open through `vlf_bake::atomic` is removed, so the outputs
+//! keep their previous contents and nothing is left beside them; then one line on standard error,
+//! and exit 130 (SIGINT), 143 (SIGTERM), 129 (SIGHUP) or 1 (a panic). SIGKILL cannot be caught:
+//! its leftover is removed by the next write of the same path (`docs/reliability.md`).
+//!
+//! SIGXFSZ, which the kernel sends to a write past the file size limit (`ulimit -f`), would kill
+//! the process on the spot, leaving its temporary file behind and printing nothing. It is caught
+//! and ignored instead, so that the write fails with `EFBIG` ("File too large") and the command
+//! fails the ordinary way: its temporary file removed, one line, exit 1.
 //!
 //! The signal handler itself (signal-hook's) only wakes a thread; that thread removes the files,
 //! since removing files and printing are not safe in a signal handler. A panicking thread does
@@ -20,16 +25,26 @@ static STOPPING: AtomicBool = AtomicBool::new(false);
 pub const EXIT_SIGINT: i32 = 130;
 /// Exit code after SIGTERM: 128 + 15.
 pub const EXIT_SIGTERM: i32 = 143;
+/// Exit code after SIGHUP: 128 + 1.
+pub const EXIT_SIGHUP: i32 = 129;
 
-/// Starts the thread that waits for SIGINT and SIGTERM, and installs the panic hook.
+/// Starts the thread that waits for SIGINT, SIGTERM and SIGHUP, catches SIGXFSZ, and installs the
+/// panic hook.
 pub fn install() -> std::io::Result<()> {
     #[cfg(unix)]
     {
-        use signal_hook::consts::{SIGINT, SIGTERM};
-        let mut signals = signal_hook::iterator::Signals::new([SIGINT, SIGTERM])?;
+        use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM, SIGXFSZ};
+        // Caught, not left to its default action (death): the write that exceeded the file size
+        // limit then returns EFBIG, which the writer reports. Nothing else needs to know.
+        signal_hook::flag::register(SIGXFSZ, std::sync::Arc::new(AtomicBool::new(false)))?;
+        let mut signals = signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP])?;
         std::thread::Builder::new().name("vlf-signals".into()).spawn(move || {
             if let Some(signal) = signals.forever().next() {
-                let (name, code) = if signal == SIGINT { ("SIGINT", EXIT_SIGINT) } else { ("SIGTERM", EXIT_SIGTERM) };
+                let (name, code) = match signal {
+                    SIGINT => ("SIGINT", EXIT_SIGINT),
+                    SIGHUP => ("SIGHUP", EXIT_SIGHUP),
+                    _ => ("SIGTERM", EXIT_SIGTERM),
+                };
                 stop(&format!("interrupted by {name}"), code);
             }
         })?;

@@ -204,7 +204,7 @@ fn failing_to_start_a_thread_is_an_error_not_a_hang() {
     // 1: no thread at all; 2: the signal thread but no worker; 3: one worker of two; 4: both
     // workers, but not the bake's writer thread.
     for (processes, says) in [
-        ("1", "error: cannot install the handler of SIGINT and SIGTERM: "),
+        ("1", "error: cannot install the handler of SIGINT, SIGTERM, SIGHUP and SIGXFSZ: "),
         ("2", "error: cannot start 2 worker threads: "),
         ("3", "error: cannot start 2 worker threads: "),
         ("4", "error: internal error in thread vlf-worker-"),

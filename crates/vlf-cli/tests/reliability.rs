@@ -298,12 +298,13 @@ fn failed_bakes_leave_the_previous_field_and_no_temporary_files() {
         ("a directory as the output", bake(&bunny, dir.path(), &[]), vec!["is a directory"]),
     ];
     // A write that fails midway: the file size limit (512-byte blocks in POSIX sh) stops the
-    // field at 512 KiB, with SIGXFSZ ignored so that the write fails with EFBIG.
+    // field at 512 KiB. SIGXFSZ is left at its default action (death), as a shell leaves it: the
+    // binary itself must catch it so that the write fails with EFBIG.
     #[cfg(unix)]
     failures.push((
         "a write that fails midway",
         run(Command::new("sh")
-            .args(["-c", r#"trap "" XFSZ; ulimit -f 1024; exec "$0" "$@""#, BIN, "bake"])
+            .args(["-c", r#"ulimit -f 1024; exec "$0" "$@""#, BIN, "bake"])
             .arg(&bunny)
             .arg("-o")
             .arg(&out)
@@ -314,6 +315,53 @@ fn failed_bakes_leave_the_previous_field_and_no_temporary_files() {
         r.fails_saying(&phrases);
         assert!(std::fs::read(&out).unwrap() == previous, "{what}: the previous field changed");
         assert_eq!(names_in(dir.path()), ["scene.vlf"], "{what}: files left behind");
+    }
+}
+
+/// Every command that writes a file, stopped midway by the file size limit (`ulimit -f`, with
+/// SIGXFSZ at its default action, death, as a shell leaves it): one line naming the output and
+/// "File too large", exit 1, and no temporary file, not a process killed by SIGXFSZ with its
+/// temporary file left behind.
+#[cfg(unix)]
+#[test]
+fn a_write_past_the_file_size_limit_fails_with_one_line_and_leaves_no_temporary_file() {
+    let dir = tempdir();
+    let field = dir.path().join("scene.vlf");
+    bake(&mesh("bunny.obj"), &field, &[]).ok();
+    let packed = dir.path().join("packed.vlf");
+    vlf(&["pack", s(&field), "-o", s(&packed), "-q"]).ok();
+    let rays = dir.path().join("rays.bin");
+    vlf(&["rays", s(&field), "-o", s(&rays), "--width", "64", "--height", "64", "-q"]).ok();
+    let out = dir.path().join("out");
+    std::fs::create_dir(&out).unwrap();
+    let o = |name: &str| out.join(name).to_str().unwrap().to_string();
+    let bunny = mesh("bunny.obj");
+    // 10 KiB: less than each of these outputs (a 64×64 hits file is 64 KiB).
+    let cases: [(Vec<String>, &str); 5] = [
+        (
+            vec![
+                "bake".into(),
+                s(&bunny).into(),
+                "-o".into(),
+                o("b.vlf"),
+                "--directions".into(),
+                "33".into(),
+                "--tiles".into(),
+                "16".into(),
+            ],
+            "b.vlf",
+        ),
+        (vec!["pack".into(), s(&field).into(), "-o".into(), o("p.vlf")], "out"),
+        (vec!["unpack".into(), s(&packed).into(), "-o".into(), o("u.vlf")], "u.vlf"),
+        (vec!["trace".into(), s(&field).into(), "--rays".into(), s(&rays).into(), "-o".into(), o("h.bin")], "h.bin"),
+        (vec!["render".into(), s(&field).into(), "-o".into(), o("x.png"), "--width".into(), "320".into()], "x.png"),
+    ];
+    for (args, name) in cases {
+        let mut args = args;
+        args.push("-q".into());
+        let r = common::vlf_with_ulimit("-f 20", &args);
+        r.fails_saying(&["File too large", name]);
+        assert_eq!(names_in(&out), Vec::<String>::new(), "`{}` left files behind", r.what);
     }
 }
 
