@@ -404,6 +404,110 @@ fn an_unwritable_output_directory_is_an_error_and_is_left_as_it_was() {
 }
 
 // ---------------------------------------------------------------------------------------------
+// Inputs that are not regular files
+
+/// Runs `vlf-bake ARGS...` in `dir` with at most 4 GiB of address space, killing it if it has not
+/// ended within a minute: a read of `/dev/zero` then fails fast instead of filling the memory of
+/// the machine, and a wait on a pipe fails the test instead of hanging it.
+#[cfg(unix)]
+fn run_bounded(dir: &Path, args: &[&str]) -> Run {
+    let what = common::describe(args);
+    let mut child = Command::new("sh")
+        .arg("-c")
+        .arg(r#"ulimit -v 4194304 && exec "$0" "$@""#)
+        .arg(BIN)
+        .args(args)
+        .current_dir(dir)
+        .env_remove("RAYON_NUM_THREADS")
+        .env_remove("VLF_CACHE_DIR")
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let deadline = Instant::now() + Duration::from_secs(60);
+    while child.try_wait().unwrap().is_none() {
+        if Instant::now() > deadline {
+            child.kill().unwrap();
+            child.wait().unwrap();
+            panic!("`{what}` hung (killed after a minute)");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    Run::from_output(what, child.wait_with_output().unwrap())
+}
+
+/// Every input a command reads (meshes, OBJ material libraries, external glTF buffers, rays
+/// files, scene files and the meshes they insert) must be a regular file: a directory, a pipe or
+/// a device is refused at once, in one line naming the path and what it is. Before, `/dev/zero`
+/// was read until memory ran out and a pipe was waited on forever.
+#[cfg(unix)]
+#[test]
+fn inputs_that_are_not_regular_files_are_refused_by_what_they_are() {
+    let dir = tempdir();
+    let d = dir.path();
+    bake(&mesh("bunny.obj"), &d.join("f.vlf"), &[]).ok();
+    vlf(&["rays", s(&d.join("f.vlf")), "-o", s(&d.join("r.bin")), "--width", "8", "--height", "8", "-q"]).ok();
+    assert!(Command::new("mkfifo").arg(d.join("pipe.obj")).status().unwrap().success());
+    std::fs::create_dir(d.join("dir.obj")).unwrap();
+    let triangle = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+    std::fs::write(d.join("zero_mtl.obj"), format!("mtllib /dev/zero\n{triangle}")).unwrap();
+    std::fs::write(d.join("pipe_mtl.obj"), format!("mtllib pipe.obj\n{triangle}")).unwrap();
+    std::fs::write(d.join("missing_mtl.obj"), format!("mtllib missing.mtl\n{triangle}")).unwrap();
+    let gltf = |uri: &str| {
+        format!(
+            r#"{{"asset":{{"version":"2.0"}},"buffers":[{{"uri":"{uri}","byteLength":36}}],
+            "bufferViews":[{{"buffer":0,"byteLength":36}}],"accessors":[{{"bufferView":0,"componentType":5126,
+            "count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}}],"meshes":[{{"primitives":[{{"attributes":
+            {{"POSITION":0}}}}]}}],"nodes":[{{"mesh":0}}],"scenes":[{{"nodes":[0]}}],"scene":0}}"#
+        )
+    };
+    std::fs::write(d.join("zero_uri.gltf"), gltf("file:///dev/zero")).unwrap();
+    std::fs::write(d.join("zero_path.gltf"), gltf("/dev/zero")).unwrap();
+    std::fs::write(d.join("s.json"), r#"{"instances":[{"field":"f.vlf","insert":[{"mesh":"/dev/zero"}]}]}"#).unwrap();
+    let dev = "it is a character device, not a regular file";
+    let fifo = "it is a pipe (FIFO), not a regular file";
+    let hits = ["-o", "h.bin"];
+    let cases: Vec<(Vec<&str>, Vec<&str>)> = vec![
+        (vec!["bake", "pipe.obj", "-o", "o.vlf"], vec!["cannot read pipe.obj: ", fifo]),
+        (vec!["bake", "/dev/zero", "-o", "o.vlf"], vec!["cannot read /dev/zero: ", dev]),
+        (vec!["bake", "dir.obj", "-o", "o.vlf"], vec!["cannot read dir.obj: it is a directory, not a regular file"]),
+        (vec!["bake", "zero_mtl.obj", "-o", "o.vlf"], vec!["zero_mtl.obj", "material library \"/dev/zero\"", dev]),
+        (vec!["bake", "pipe_mtl.obj", "-o", "o.vlf"], vec!["pipe_mtl.obj", "material library \"pipe.obj\"", fifo]),
+        (vec!["bake", "zero_uri.gltf", "-o", "o.vlf"], vec!["zero_uri.gltf", "buffer 0", "(/dev/zero)", dev]),
+        (vec!["bake", "zero_path.gltf", "-o", "o.vlf"], vec!["zero_path.gltf", "buffer 0", "(/dev/zero)", dev]),
+        ([&["trace", "f.vlf", "--rays", "/dev/zero"][..], &hits].concat(), vec!["rays file /dev/zero: ", dev]),
+        ([&["trace", "f.vlf", "--rays", "pipe.obj"][..], &hits].concat(), vec!["rays file pipe.obj: ", fifo]),
+        (
+            [&["trace", "--scene", "/dev/zero", "--rays", "r.bin"][..], &hits].concat(),
+            vec!["scene file /dev/zero: ", dev],
+        ),
+        (
+            [&["trace", "--scene", "s.json", "--rays", "r.bin"][..], &hits].concat(),
+            vec!["s.json", "instance 0", "insert", "/dev/zero: ", dev],
+        ),
+    ];
+    for (args, phrases) in cases {
+        let args = [&args[..], &["--directions", "3", "--tiles", "2"][..]].concat();
+        let args = if args[0] == "bake" { args } else { args[..args.len() - 4].to_vec() };
+        run_bounded(d, &args).fails_saying(&phrases);
+        assert!(!d.join("o.vlf").exists() && !d.join("h.bin").exists(), "{args:?} wrote an output");
+    }
+    // An external buffer is read up to its byteLength, however long its file: here 36 bytes of a
+    // 16 GiB sparse file, which the 4 GiB of address space could not hold.
+    let big = std::fs::File::create(d.join("big.bin")).unwrap();
+    let triangle: Vec<u8> = [0f32, 0., 0., 1., 0., 0., 0., 1., 0.].iter().flat_map(|c| c.to_le_bytes()).collect();
+    std::io::Write::write_all(&mut &big, &triangle).unwrap();
+    big.set_len(16 << 30).unwrap();
+    std::fs::write(d.join("big.gltf"), gltf("big.bin")).unwrap();
+    run_bounded(d, &["bake", "big.gltf", "-o", "o.vlf", "--directions", "3", "--tiles", "2", "-q"]).ok();
+    std::fs::remove_file(d.join("o.vlf")).unwrap();
+    // A missing material library stays a warning: the mesh bakes without its materials.
+    let r = run_bounded(d, &["bake", "missing_mtl.obj", "-o", "o.vlf", "--directions", "3", "--tiles", "2"]).ok();
+    assert!(r.stderr.contains("material library \"missing.mtl\": cannot read it"), "{}", r.stderr);
+}
+
+// ---------------------------------------------------------------------------------------------
 // A field kept mapped while a bake replaces it
 
 fn answers(field: &Field, rays: &[Ray]) -> Vec<Option<[u32; 4]>> {

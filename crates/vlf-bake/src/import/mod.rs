@@ -7,9 +7,13 @@
 //! [`ImportError`] naming the file.
 
 mod gltf;
+mod input;
 mod obj;
 
+pub use input::{NotARegularFile, check_regular_file, read_regular_file};
+
 use crate::scene::{ImportError, Scene, SceneBuilder};
+use input::ReadFile;
 use std::path::Path;
 
 /// Imports every path into one scene, in order (several inputs may be baked into one field).
@@ -30,9 +34,14 @@ pub fn import_paths(paths: &[impl AsRef<Path>]) -> Result<Scene, ImportError> {
 /// [`ImportError::NoTriangles`] saying which, even when other inputs have triangles: it is almost
 /// certainly not what the caller meant to bake. Zero-area triangles dropped from a file that has
 /// others are counted, with a warning naming the file.
+///
+/// Only regular files are read, the mesh and the files it refers to alike ([`read_regular_file`]):
+/// a directory, a pipe or a device is an error saying which, before it is opened. An external
+/// glTF buffer is read up to its declared `byteLength`, however long its file.
 pub fn import_path(builder: &mut SceneBuilder, path: &Path) -> Result<(), ImportError> {
-    let bytes = std::fs::read(path).map_err(|error| ImportError::Io { path: path.to_path_buf(), error })?;
-    import_bytes(builder, path, &bytes, &|file| std::fs::read(file))
+    let bytes =
+        read_regular_file(path, u64::MAX).map_err(|error| ImportError::Io { path: path.to_path_buf(), error })?;
+    import_with(builder, path, &bytes, &read_regular_file)
 }
 
 /// Adds a mesh held in memory to a builder, exactly as [`import_path`] adds a file: `path` names
@@ -46,6 +55,11 @@ pub fn import_bytes(
     bytes: &[u8],
     read_file: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
 ) -> Result<(), ImportError> {
+    import_with(builder, path, bytes, &|file, _| read_file(file))
+}
+
+/// [`import_bytes`] with a `read_file` that is told the most bytes wanted of a file.
+fn import_with(builder: &mut SceneBuilder, path: &Path, bytes: &[u8], read_file: &ReadFile) -> Result<(), ImportError> {
     if bytes.is_empty() {
         return Err(ImportError::Empty { path: path.to_path_buf() });
     }

@@ -12,6 +12,7 @@
 //! only the material names (to number them as sources record them) and maps each material to the
 //! Whitted model of MATERIALS (`formats/vlf.md` §5.10).
 
+use super::input::{NotARegularFile, ReadFile};
 use crate::scene::{ImportError, MaterialDesc, SceneBuilder, SourceDesc};
 use std::borrow::Cow;
 use std::cell::{Cell, RefCell};
@@ -33,7 +34,7 @@ pub(super) fn import(
     input: u32,
     path: &Path,
     bytes: &[u8],
-    read_file: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
+    read_file: &ReadFile,
 ) -> Result<(), ImportError> {
     let err = |message: String| ImportError::Obj { path: path.to_path_buf(), message };
     if bytes.starts_with(b"glTF") {
@@ -69,6 +70,8 @@ pub(super) fn import(
     let base = path.parent().unwrap_or(Path::new(""));
     let warnings = RefCell::new(Vec::new());
     let loaded_libraries = Cell::new(0usize);
+    // A library that must not be read (not a regular file): the import fails naming it.
+    let fatal = RefCell::new(None::<String>);
     // The materials of every library tobj merged, in its order (the order of material indices).
     let parsed = RefCell::new(Vec::<MaterialDesc>::new());
     // tobj's `merging`/`reordering` features (off here, but a workspace crate could unify them
@@ -84,7 +87,14 @@ pub(super) fn import(
     let (models, materials) =
         tobj::load_obj_buf(&mut std::io::Cursor::new(text.as_bytes()), &options, |library: &Path| {
             let file = base.join(library);
-            let loaded = match read_file(&file) {
+            let loaded = match read_file(&file, u64::MAX) {
+                // Not a warning: a pipe or a device named as a library is no missing file.
+                Err(e) if NotARegularFile::of(&e).is_some() => {
+                    fatal.borrow_mut().get_or_insert_with(|| {
+                        format!("material library {:?} ({}): {e}", library.display().to_string(), file.display())
+                    });
+                    Err(String::new())
+                }
                 Err(e) => Err(format!("cannot read it ({e})")),
                 Ok(b) => match std::str::from_utf8(&b) {
                     Err(_) => Err("it is not UTF-8 text".to_string()),
@@ -114,6 +124,7 @@ pub(super) fn import(
                     let map = names.iter().enumerate().map(|(i, n)| (n.clone(), i)).collect();
                     Ok((names.into_iter().map(|name| tobj::Material { name, ..Default::default() }).collect(), map))
                 }
+                Err(_) if fatal.borrow().is_some() => Err(tobj::LoadError::OpenFileFailed),
                 Err(why) => {
                     warnings.borrow_mut().push(format!(
                         "{}: material library {:?}: {why}; its materials are left unassigned",
@@ -124,7 +135,10 @@ pub(super) fn import(
                 }
             }
         })
-        .map_err(|e| err(tobj_message(e)))?;
+        .map_err(|e| err(fatal.borrow_mut().take().unwrap_or_else(|| tobj_message(e))))?;
+    if let Some(message) = fatal.into_inner() {
+        return Err(err(message));
+    }
 
     let mut warnings = warnings.into_inner();
     let materials = materials.unwrap_or_default();

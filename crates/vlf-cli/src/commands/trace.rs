@@ -10,9 +10,11 @@ use std::time::Instant;
 use vlf_bake::atomic::write_atomically;
 use vlf_runtime::{Field, Hit, Ray};
 
-/// Reads a rays file (`formats/rays.md`): 32-byte records.
+/// Reads a rays file (`formats/rays.md`): 32-byte records. Only a regular file: a device such as
+/// `/dev/zero` would be read without end, and a pipe waited on.
 fn read_rays(path: &Path) -> Result<Vec<Ray>> {
-    let bytes = std::fs::read(path).with_context(|| format!("cannot read rays file {}", path.display()))?;
+    let bytes = vlf_bake::import::read_regular_file(path, u64::MAX)
+        .with_context(|| format!("cannot read rays file {}", path.display()))?;
     match Ray::from_records(&bytes) {
         Some(rays) => Ok(rays),
         None => bail!(

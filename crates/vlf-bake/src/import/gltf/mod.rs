@@ -24,6 +24,7 @@ mod accessor;
 mod records;
 mod transform;
 
+use super::input::ReadFile;
 use crate::scene::{ImportError, MaterialDesc, SceneBuilder, SourceDesc};
 use ::gltf as gl;
 use accessor::check_layout;
@@ -52,8 +53,8 @@ const PRIMITIVE_COMPRESSION: &str = "KHR_draco_mesh_compression";
 struct Ctx<'p> {
     path: &'p Path,
     input: u32,
-    /// Fetches external buffers.
-    read_file: &'p dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
+    /// Fetches external buffers, at most the bytes asked for.
+    read_file: &'p ReadFile<'p>,
 }
 
 impl Ctx<'_> {
@@ -73,7 +74,7 @@ pub(super) fn import(
     input: u32,
     path: &Path,
     bytes: &[u8],
-    read_file: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
+    read_file: &ReadFile,
 ) -> Result<(), ImportError> {
     let ctx = Ctx { path, input, read_file };
     check_container(&ctx, bytes)?;
@@ -328,7 +329,9 @@ fn load_buffers(ctx: &Ctx, document: &gl::Document, mut blob: Option<Vec<u8>>) -
             }
             gl::buffer::Source::Uri(uri) => {
                 let file = resolve_uri(base, uri).map_err(|why| ctx.err(format!("buffer {i}: URI {uri:?}: {why}")))?;
-                (ctx.read_file)(&file).map_err(|e| {
+                // No more than the buffer's declared length: a file may be longer (only its first
+                // byteLength bytes are the buffer), or endless (a device, refused by `read_file`).
+                (ctx.read_file)(&file, buffer.length() as u64).map_err(|e| {
                     ctx.err(format!("buffer {i}: cannot read external file {uri:?} ({}): {e}", file.display()))
                 })?
             }
