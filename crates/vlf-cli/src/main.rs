@@ -13,6 +13,7 @@
 
 mod args;
 mod commands;
+mod distinct;
 mod limits;
 mod progress;
 mod stop;

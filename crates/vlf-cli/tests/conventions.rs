@@ -287,3 +287,72 @@ fn every_flag_of_every_command_has_help() {
         }
     }
 }
+
+/// An output that is an input or another output would replace it (the atomic write succeeds, and
+/// the input is gone): a bad command line naming both flags and paths, before any work. Files
+/// are compared by identity, so `./x`, `sub/../x` and a symbolic link are caught too; paths where
+/// nothing exists yet, by their normalised spelling.
+#[test]
+fn an_output_that_is_an_input_or_another_output_is_a_bad_command_line() {
+    let dir = tempdir();
+    let d = dir.path();
+    let in_dir = |args: &[&str]| common::run(common::command().current_dir(d).args(args));
+    std::fs::write(d.join("t2.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    box_field(d, "bunny", [-1.0; 3], [1.0; 3]);
+    in_dir(&["rays", "bunny.vlf", "-o", "r.bin", "--width", "8", "--height", "8", "-q"]).ok();
+    in_dir(&["pack", "bunny.vlf", "-o", "p.vlf", "-q"]).ok();
+    for k in 0..2 {
+        let shard = format!("{k}/2");
+        let out = format!("s{k}.vlfs");
+        in_dir(&["bake", "t2.obj", "-o", &out, "--shard", &shard, "--directions", "9", "--tiles", "2", "-q"]).ok();
+    }
+    std::fs::create_dir(d.join("sub")).unwrap();
+    #[cfg(unix)]
+    std::os::unix::fs::symlink("bunny.vlf", d.join("link.vlf")).unwrap();
+    let before: Vec<(String, Vec<u8>)> = names_in(d)
+        .into_iter()
+        .filter(|n| n != "sub")
+        .map(|n| (n.clone(), std::fs::read(d.join(&n)).unwrap()))
+        .collect();
+    let same =
+        |a: &str, b: &str, role: &str| format!("{a} is the same file as the {role} {b}: writing it would destroy");
+    let mut cases: Vec<(Vec<&str>, String)> = vec![
+        (vec!["bake", "t2.obj", "-o", "t2.obj"], same("-o/--output t2.obj", "INPUT t2.obj", "input")),
+        (
+            vec!["trace", "bunny.vlf", "--rays", "r.bin", "-o", "./bunny.vlf"],
+            same("-o/--output ./bunny.vlf", "FIELD bunny.vlf", "input"),
+        ),
+        (
+            vec!["trace", "bunny.vlf", "--rays", "r.bin", "-o", "r.bin"],
+            same("-o/--output r.bin", "--rays r.bin", "input"),
+        ),
+        (vec!["merge", "s0.vlfs", "s1.vlfs", "-o", "s0.vlfs"], same("-o/--output s0.vlfs", "SHARD s0.vlfs", "input")),
+        (
+            vec!["bake", "t2.obj", "-o", "f.vlf", "--report", "f.vlf"],
+            same("--report f.vlf", "-o/--output f.vlf", "output"),
+        ),
+        (
+            vec!["render", "bunny.vlf", "-o", "same.png", "--work-image", "sub/../same.png"],
+            same("--work-image sub/../same.png", "-o/--output same.png", "output"),
+        ),
+        (vec!["pack", "bunny.vlf", "-o", "bunny.vlf"], same("-o/--output bunny.vlf", "FIELD bunny.vlf", "input")),
+        (vec!["unpack", "p.vlf", "-o", "sub/../p.vlf"], same("-o/--output sub/../p.vlf", "PACKED p.vlf", "input")),
+        (vec!["rays", "bunny.vlf", "-o", "bunny.vlf"], same("-o/--output bunny.vlf", "FIELD bunny.vlf", "input")),
+    ];
+    #[cfg(unix)]
+    cases.push((vec!["pack", "bunny.vlf", "-o", "link.vlf"], same("-o/--output link.vlf", "FIELD bunny.vlf", "input")));
+    for (args, says) in cases {
+        let r = in_dir(&args).fails_with(2);
+        let first = r.stderr.lines().next().unwrap_or_default();
+        assert!(first.starts_with(&format!("error: {says}")), "`{}`:\n{}", r.what, r.stderr);
+        let after: Vec<(String, Vec<u8>)> = names_in(d)
+            .into_iter()
+            .filter(|n| n != "sub")
+            .map(|n| (n.clone(), std::fs::read(d.join(&n)).unwrap()))
+            .collect();
+        assert!(after == before, "`{}` changed or wrote files", r.what);
+    }
+    // Two outputs on a device are no loss: both go to /dev/null.
+    #[cfg(unix)]
+    in_dir(&["render", "bunny.vlf", "-o", "/dev/null", "--work-image", "/dev/null", "--width", "8", "-q"]).ok();
+}

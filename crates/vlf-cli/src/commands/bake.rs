@@ -2,6 +2,7 @@
 
 use super::{resolve_cache, stdout_line};
 use crate::args::BakeArgs;
+use crate::distinct::check_outputs;
 use crate::progress::Bar;
 use anyhow::{Context, Result};
 use vlf_bake::job::{BakeJob, run_bake_job};
@@ -10,6 +11,9 @@ use vlf_bake::{BakeConfig, DepthPolicy};
 
 /// `vlf-bake bake`: runs the bake job and prints its summary.
 pub fn run(a: &BakeArgs) -> Result<()> {
+    let inputs: Vec<_> = a.inputs.iter().map(|i| ("INPUT", i.as_path())).collect();
+    let report = a.report.as_deref().map(|r| ("--report", r));
+    check_outputs(&inputs, &[[("-o/--output", a.output.as_path())].as_slice(), report.as_slice()].concat())?;
     let config = BakeConfig {
         directions: a.directions,
         tiles: a.tiles,

@@ -2,6 +2,7 @@
 
 use super::{resolve_cache, stdout_line};
 use crate::args::MergeArgs;
+use crate::distinct::check_outputs;
 use crate::progress::Bar;
 use anyhow::{Context, Result};
 use vlf_bake::job::run_merge_job;
@@ -9,6 +10,9 @@ use vlf_bake::params::human_bytes;
 
 /// `vlf-bake merge`: runs the merge job and prints its summary.
 pub fn run(a: &MergeArgs) -> Result<()> {
+    let parts: Vec<_> = a.parts.iter().map(|p| ("SHARD", p.as_path())).collect();
+    let report = a.report.as_deref().map(|r| ("--report", r));
+    check_outputs(&parts, &[[("-o/--output", a.output.as_path())].as_slice(), report.as_slice()].concat())?;
     let (cache, cache_note) = resolve_cache(&a.cache, a.quiet);
     let bar = Bar::new(a.quiet || a.json);
     let out = run_merge_job(&a.parts, &a.output, cache, cache_note, &bar)?;

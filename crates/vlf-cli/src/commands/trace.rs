@@ -2,6 +2,7 @@
 
 use super::stdout_line;
 use crate::args::TraceArgs;
+use crate::distinct::check_outputs;
 use crate::values::BadUsage;
 use anyhow::{Context, Result, bail};
 use std::io::Write;
@@ -47,6 +48,12 @@ pub fn run(a: &TraceArgs) -> Result<()> {
     if a.instance_ids.is_some() && a.scene.is_none() {
         return Err(BadUsage("--instance-ids needs --scene: a field's hits name no instance".into()).into());
     }
+    let source = a.field.as_deref().map(|f| ("FIELD", f)).or(a.scene.as_deref().map(|s| ("--scene", s)));
+    let ids = a.instance_ids.as_deref().map(|i| ("--instance-ids", i));
+    check_outputs(
+        &[source.as_slice(), &[("--rays", a.rays.as_path())]].concat(),
+        &[[("-o/--output", a.output.as_path())].as_slice(), ids.as_slice()].concat(),
+    )?;
     let rays;
     let (hits, seconds) = match (&a.field, &a.scene) {
         (_, Some(scene)) => {
