@@ -43,16 +43,25 @@ impl FromStr for ShardSpec {
     fn from_str(s: &str) -> Result<Self, String> {
         let bad = || format!("`{s}` is not a shard: write K/N, shard K (counted from 0) of N, e.g. 0/4 … 3/4");
         let (k, n) = s.split_once('/').ok_or_else(bad)?;
-        let index: u32 = k.trim().parse().map_err(|_| bad())?;
-        let count: u32 = n.trim().parse().map_err(|_| bad())?;
-        if count == 0 || count > MAX_SHARDS {
-            return Err(format!("shard count {count} in `{s}` is outside 1..={MAX_SHARDS}"));
-        }
-        if index >= count {
+        // A whole number, `None` if too large for a u32 (then out of range, not malformed).
+        let number = |t: &str| {
+            let t = t.trim();
+            let digits = t.strip_prefix('+').unwrap_or(t);
+            if digits.is_empty() || !digits.bytes().all(|b| b.is_ascii_digit()) {
+                return Err(bad());
+            }
+            Ok(digits.parse::<u32>().ok())
+        };
+        let (index, count) = (number(k)?, number(n)?);
+        let Some(count) = count.filter(|c| (1..=MAX_SHARDS).contains(c)) else {
+            return Err(format!("shard count {} in `{s}` is outside 1..={MAX_SHARDS}", n.trim()));
+        };
+        let Some(index) = index.filter(|i| *i < count) else {
             return Err(format!(
-                "shard index {index} in `{s}` must be below the count {count} (shards are 0..{count})"
+                "shard index {} in `{s}` must be below the count {count} (shards are 0..{count})",
+                k.trim()
             ));
-        }
+        };
         Ok(ShardSpec { index, count })
     }
 }
@@ -598,6 +607,13 @@ mod tests {
             ("7/3", "must be below the count 3"),
             ("0/0", "shard count 0 in `0/0` is outside 1..=65536"),
             ("0/65537", "shard count 65537 in `0/65537` is outside 1..=65536"),
+            ("0/4294967296", "shard count 4294967296 in `0/4294967296` is outside 1..=65536"),
+            (
+                "0/99999999999999999999999",
+                "shard count 99999999999999999999999 in `0/99999999999999999999999` is outside",
+            ),
+            ("4294967296/4", "shard index 4294967296 in `4294967296/4` must be below the count 4"),
+            ("0/-1", "`0/-1` is not a shard"),
             ("1", "`1` is not a shard: write K/N, shard K (counted from 0) of N, e.g. 0/4 … 3/4"),
             ("a/4", "`a/4` is not a shard"),
             ("1/b", "`1/b` is not a shard"),

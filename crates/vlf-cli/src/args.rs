@@ -108,7 +108,7 @@ pub struct BakeArgs {
     pub json: bool,
     /// Bake only shard K of N (K = 0..N-1): its share of the directions, into a shard file for
     /// `vlf-bake merge` (docs/build-farms.md).
-    #[arg(long, value_name = "K/N")]
+    #[arg(long, value_name = "K/N", allow_hyphen_values = true)]
     pub shard: Option<vlf_bake::shard::ShardSpec>,
     #[command(flatten)]
     pub cache: CacheChoice,
@@ -168,7 +168,9 @@ pub enum CacheAction {
     /// Check every byte of every entry (as `dump --verify`) and its key; remove the bad ones.
     Verify,
     /// Remove entries unused for longer than --max-age, then the least recently used ones until
-    /// the cache fits in --max-size; and temporary files left by crashed bakes.
+    /// the cache fits in --max-size; and temporary files left by crashed bakes. Needs one of the
+    /// two, or both.
+    #[command(group(clap::ArgGroup::new("limit").args(["max_size", "max_age"]).required(true).multiple(true)))]
     Prune {
         /// Keep at most this many bytes (e.g. 20GiB).
         #[arg(long, value_parser = size(), value_name = "SIZE", allow_negative_numbers = true)]

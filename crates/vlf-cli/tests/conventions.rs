@@ -178,6 +178,18 @@ fn out_of_range_values_are_bad_command_lines_with_one_message() {
             "--threads must be between 1 and 1024, got x",
         ),
         (vec!["gen", "random", "--count", "-3", "-o", s(&out)], "--count must be between 1 and 4294967295, got -3"),
+        // A shard's spelling: a leading `-` is a bad value, not an unknown flag; a count past u32
+        // is out of range, not malformed.
+        (
+            [&bake[..], &["--shard", "-1/2"]].concat(),
+            "invalid value '-1/2' for '--shard <K/N>': `-1/2` is not a shard: write K/N, shard K (counted from 0) \
+             of N, e.g. 0/4 … 3/4",
+        ),
+        (
+            [&bake[..], &["--shard", "0/4294967296"]].concat(),
+            "invalid value '0/4294967296' for '--shard <K/N>': shard count 4294967296 in `0/4294967296` is \
+             outside 1..=65536",
+        ),
     ];
     for (args, line) in cases {
         bad_usage(vlf(&args), line);

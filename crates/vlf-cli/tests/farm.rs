@@ -388,8 +388,16 @@ fn cache_list_and_prune() {
     let pruned = vlf(&["cache", "prune", "--cache-dir", s(&cache), "--max-size", &max_size, "--json"]).ok().json();
     assert_eq!(pruned["removed"], serde_json::json!([keys[2]]), "the least recently used goes");
     assert_eq!(names_in(&cache.join("v1")), [format!("{}.vlf", keys[0])]);
-    let r = vlf(&["cache", "prune", "--cache-dir", s(&cache)]);
-    assert!(r.one_error_line().contains("--max-size or --max-age"));
+    // Neither limit is a bad command line (exit 2), as is no cache directory at all.
+    let r = vlf(&["cache", "prune", "--cache-dir", s(&cache)]).fails_with(2);
+    assert!(r.stderr.starts_with("error: the following required arguments were not provided"), "{}", r.stderr);
+    assert!(r.stderr.contains("--max-size <SIZE>|--max-age <DURATION>"), "{}", r.stderr);
+    for action in ["list", "verify", "prune --max-age 1d"] {
+        let args: Vec<&str> = ["cache"].into_iter().chain(action.split(' ')).collect();
+        let r = vlf(&args).fails_with(2);
+        let first = r.stderr.lines().next().unwrap_or_default();
+        assert_eq!(first, "error: no cache directory: pass --cache-dir DIR or set VLF_CACHE_DIR", "{}", r.stderr);
+    }
 }
 
 /// A farm's merged field goes into the cache, where a later plain bake of the same inputs finds it.

@@ -2,6 +2,7 @@
 
 use super::stdout_line;
 use crate::args::{CacheAction, CacheArgs};
+use crate::values::BadUsage;
 use anyhow::{Context, Result, bail};
 use std::path::PathBuf;
 use vlf_bake::cache::{CACHE_DIR_ENV, Cache};
@@ -11,7 +12,7 @@ use vlf_bake::params::{count, human_bytes};
 pub fn run(a: &CacheArgs) -> Result<()> {
     let env = std::env::var_os(CACHE_DIR_ENV).filter(|v| !v.is_empty()).map(PathBuf::from);
     let Some(dir) = a.cache_dir.clone().or(env) else {
-        bail!("no cache directory: pass --cache-dir DIR or set {CACHE_DIR_ENV}")
+        return Err(BadUsage(format!("no cache directory: pass --cache-dir DIR or set {CACHE_DIR_ENV}")).into());
     };
     if !dir.is_dir() {
         bail!("{} is not a directory", dir.display());
@@ -69,9 +70,7 @@ pub fn run(a: &CacheArgs) -> Result<()> {
             Ok(())
         }
         CacheAction::Prune { max_size, max_age } => {
-            if max_size.is_none() && max_age.is_none() {
-                bail!("prune needs --max-size or --max-age (or both)");
-            }
+            // (clap requires one of them: the `limit` group of `CacheAction::Prune`.)
             let r = cache.prune(*max_size, *max_age).with_context(|| format!("cannot prune {}", dir.display()))?;
             if a.json {
                 return stdout_line(&serde_json::to_string_pretty(&r)?);
