@@ -416,14 +416,22 @@ pub fn parse_duration(s: &str) -> Result<Duration, String> {
     let t = s.trim();
     let split = t.find(|c: char| c.is_ascii_alphabetic()).unwrap_or(t.len());
     let (num, unit) = t.split_at(split);
-    let value: f64 = num.trim().parse().map_err(|_| format!("`{s}` is not a duration (try 30d, 12h, 90m or 3600s)"))?;
+    let forms = "write a number and a unit s, m, h, d or w, such as 30d, 12h, 90m or 3600s";
+    // A plain decimal number: `1e3` is not one (its `e3` would read as a unit).
+    let plain = |n: &str| n.bytes().all(|b| b.is_ascii_digit() || b == b'.' || b == b'-' || b == b'+');
+    let value: f64 = num
+        .trim()
+        .parse()
+        .ok()
+        .filter(|_| plain(num.trim()))
+        .ok_or_else(|| format!("`{s}` is not a duration: {forms}"))?;
     let scale = match unit.trim() {
         "" | "s" => 1.0,
         "m" | "min" => 60.0,
         "h" => 3600.0,
         "d" => 86400.0,
         "w" => 7.0 * 86400.0,
-        other => return Err(format!("unknown duration unit `{other}` in `{s}` (use s, m, h, d or w)")),
+        _ => return Err(format!("`{s}` is not a duration: {forms}")),
     };
     let secs = value * scale;
     if !(0.0..1e15).contains(&secs) {
@@ -444,6 +452,10 @@ mod tests {
         assert_eq!(parse_duration("15"), Ok(Duration::from_secs(15)));
         assert!(parse_duration("3 fortnights").is_err());
         assert!(parse_duration("-1h").is_err());
+        for bad in ["1e3", "3 fortnights", "soon", "1.5.2h"] {
+            let e = parse_duration(bad).unwrap_err();
+            assert!(e.starts_with(&format!("`{bad}` is not a duration: write a number and a unit")), "{e}");
+        }
     }
 
     #[test]

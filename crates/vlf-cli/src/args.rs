@@ -81,7 +81,8 @@ pub struct BakeArgs {
     #[arg(long, default_value_t = DEFAULT_LEAF_SIZE, value_name = "K", value_parser = between(1, u32::MAX),
           allow_negative_numbers = true)]
     pub leaf_size: u32,
-    /// BSP depth policy: largest depth of a tile's 1D BSP, 0 to 24 (0 = linear tiles, no BSP).
+    /// BSP depth policy: largest depth of a tile's 1D BSP, 0 to 12, the format's limit (0 = linear
+    /// tiles, no BSP).
     /// Not `render --bounces`, which once had this name.
     #[arg(long, default_value_t = DEFAULT_MAX_DEPTH, value_name = "D", value_parser = between(0, MAX_BSP_DEPTH),
           allow_negative_numbers = true)]
@@ -497,6 +498,19 @@ mod tests {
                 panic!("{args:?}: {e}");
             }
         }
+    }
+
+    /// The range `bake --help` gives for --max-depth is the one its parser accepts.
+    #[test]
+    fn max_depth_help_gives_the_range_the_parser_accepts() {
+        let cmd = Cli::command();
+        let bake = cmd.find_subcommand("bake").unwrap();
+        let arg = bake.get_arguments().find(|a| a.get_id() == "max_depth").unwrap();
+        let help = arg.get_help().unwrap().to_string();
+        assert!(help.contains(&format!("0 to {MAX_BSP_DEPTH},")), "{help}");
+        let parse =
+            |d: u32| Cli::try_parse_from(["vlf-bake", "bake", "m.obj", "-o", "f.vlf", "--max-depth", &d.to_string()]);
+        assert!(parse(MAX_BSP_DEPTH).is_ok() && parse(MAX_BSP_DEPTH + 1).is_err());
     }
 
     /// The bake's flags default to the library's defaults, so the CLI, the C API and the Python

@@ -136,8 +136,8 @@ impl clap::builder::TypedValueParser for Real {
     }
 }
 
-/// A size in bytes (see [`parse_size`]): `--max-bytes must be a size between 1 B and 16 EiB (such
-/// as 4GiB, 512MiB or 1e9), got banana`.
+/// A size in bytes (see [`parse_size`]): `--max-bytes must be a size between 1 B and 16 EiB - 1 B
+/// (such as 4GiB, 512MiB or 1e9), got banana: …`.
 #[derive(Clone, Copy, Debug)]
 pub struct Size;
 
@@ -155,7 +155,7 @@ impl clap::builder::TypedValueParser for Size {
             usage_error(
                 cmd,
                 format!(
-                    "{} must be a size between 1 B and 16 EiB (such as 4GiB, 512MiB or 1e9), got {text}: {why}",
+                    "{} must be a size between 1 B and 16 EiB - 1 B (such as 4GiB, 512MiB or 1e9), got {text}: {why}",
                     flag_name(arg)
                 ),
             )
@@ -163,29 +163,70 @@ impl clap::builder::TypedValueParser for Size {
     }
 }
 
-/// Parses `4GiB`, `512MiB`, `100MB`, `1e9`, `123456`.
+/// The number at the start of `t` (digits, a point, an exponent such as `e9`) and the rest: the
+/// `E` of `16EiB` is a unit, the `e` of `1e9` an exponent.
+fn split_number(t: &str) -> (&str, &str) {
+    let b = t.as_bytes();
+    let digits = |mut i: usize| {
+        while i < b.len() && (b[i].is_ascii_digit() || b[i] == b'.') {
+            i += 1;
+        }
+        i
+    };
+    let mut i = digits(usize::from(matches!(b.first(), Some(b'+' | b'-'))));
+    if matches!(b.get(i), Some(b'e' | b'E')) {
+        let sign = usize::from(matches!(b.get(i + 1), Some(b'+' | b'-')));
+        if b.get(i + 1 + sign).is_some_and(u8::is_ascii_digit) {
+            i = digits(i + 1 + sign);
+        }
+    }
+    t.split_at(i)
+}
+
+/// Parses `4GiB`, `512MiB`, `100MB`, `1e9`, `123456`, up to 16 EiB - 1 B (`u64::MAX` bytes, the
+/// largest size, which `18446744073709551615` gives exactly).
 pub fn parse_size(s: &str) -> Result<u64, String> {
     let t = s.trim();
-    let split = t.find(|c: char| c.is_ascii_alphabetic() && c != 'e' && c != 'E').unwrap_or(t.len());
-    let (num, unit) = t.split_at(split);
-    let value: f64 = num.trim().parse().map_err(|_| format!("`{s}` is not a size (try 4GiB, 512MiB or 1000000)"))?;
-    let scale = match unit.trim().to_ascii_lowercase().as_str() {
-        "" | "b" => 1.0,
-        "k" | "kb" => 1e3,
-        "m" | "mb" => 1e6,
-        "g" | "gb" => 1e9,
-        "t" | "tb" => 1e12,
-        "kib" => 1024.0,
-        "mib" => 1024.0 * 1024.0,
-        "gib" => 1024.0 * 1024.0 * 1024.0,
-        "tib" => 1024.0f64.powi(4),
-        other => return Err(format!("unknown size unit `{other}` in `{s}` (use B, KB, MB, GB, KiB, MiB, GiB)")),
+    let (num, unit) = split_number(t);
+    let value: f64 = num.parse().map_err(|_| format!("`{s}` is not a size (try 4GiB, 512MiB or 1000000)"))?;
+    let scale: u64 = match unit.trim().to_ascii_lowercase().as_str() {
+        "" | "b" => 1,
+        "k" | "kb" => 1_000,
+        "m" | "mb" => 1_000_000,
+        "g" | "gb" => 1_000_000_000,
+        "t" | "tb" => 1_000_000_000_000,
+        "p" | "pb" => 1_000_000_000_000_000,
+        "e" | "eb" => 1_000_000_000_000_000_000,
+        "kib" => 1 << 10,
+        "mib" => 1 << 20,
+        "gib" => 1 << 30,
+        "tib" => 1 << 40,
+        "pib" => 1 << 50,
+        "eib" => 1 << 60,
+        other => {
+            return Err(format!(
+                "unknown size unit `{other}` in `{s}` (use B, KB, MB, GB, TB, PB, EB, KiB, MiB, GiB, TiB, PiB or EiB)"
+            ));
+        }
     };
-    let bytes = value * scale;
-    if !(bytes.is_finite() && bytes >= 1.0 && bytes < u64::MAX as f64) {
-        return Err(format!("`{s}` is not a positive size"));
+    let too_large = || format!("`{s}` is too large: the largest size is {} bytes (16 EiB - 1 B)", u64::MAX);
+    // Whole numbers exactly (an f64 cannot hold every u64); the others through f64.
+    let bytes = match num.trim_start_matches('+').parse::<u128>() {
+        Ok(n) => n.checked_mul(scale as u128).and_then(|b| u64::try_from(b).ok()).ok_or_else(too_large)?,
+        Err(_) if value.is_nan() || value <= 0.0 => return Err(format!("`{s}` is not a positive size")),
+        Err(_) => {
+            let bytes = value * scale as f64;
+            // 2^64, the first f64 past u64::MAX.
+            if bytes >= 18_446_744_073_709_551_616.0 {
+                return Err(too_large());
+            }
+            bytes as u64
+        }
+    };
+    if bytes == 0 {
+        return Err(format!("`{s}` is not a positive size: the smallest is 1 byte"));
     }
-    Ok(bytes as u64)
+    Ok(bytes)
 }
 
 /// Parses `x,y,z`.
@@ -312,6 +353,17 @@ mod tests {
         assert!(parse_size("-1MB").is_err());
         assert!(parse_size("3 parsecs").unwrap_err().contains("unknown size unit"));
         assert!(parse_size("lots").unwrap_err().contains("is not a size"));
+        // The whole range the message gives, exactly, and its units.
+        assert_eq!(parse_size("18446744073709551615"), Ok(u64::MAX));
+        assert_eq!(parse_size("15EiB"), Ok(15 << 60));
+        assert_eq!(parse_size("1e18"), Ok(1_000_000_000_000_000_000));
+        assert_eq!(parse_size("2PiB"), Ok(2 << 50));
+        for large in ["18446744073709551616", "16EiB", "1e30", "99999999999999999999999999999999999999999", "1e400"] {
+            assert!(parse_size(large).unwrap_err().contains("is too large: the largest size is"), "{large}");
+        }
+        assert!(parse_size("0.1").unwrap_err().contains("the smallest is 1 byte"));
+        assert!(parse_size("nan").unwrap_err().contains("is not a size"));
+        assert!(parse_size("-1").unwrap_err().contains("is not a positive size"));
     }
 
     #[test]

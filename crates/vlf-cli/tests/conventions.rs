@@ -196,7 +196,25 @@ fn out_of_range_values_are_bad_command_lines_with_one_message() {
     }
     // Sizes name the flag too.
     let r = vlf(&[&bake[..], &["--max-bytes", "banana"]].concat()).fails_with(2);
-    assert!(r.stderr.starts_with("error: --max-bytes must be a size between 1 B and 16 EiB"), "{}", r.stderr);
+    assert!(r.stderr.starts_with("error: --max-bytes must be a size between 1 B and 16 EiB - 1 B"), "{}", r.stderr);
+    // ...the whole range they give, in every unit up to EiB: a missing input (exit 1) shows the
+    // size was accepted. Past it, a size is too large, not "not a positive size".
+    let missing = ["bake", "missing.obj", "-o", s(&out), "--max-bytes"];
+    for accepted in ["18446744073709551615", "15EiB", "1e18"] {
+        vlf(&[&missing[..], &[accepted]].concat()).one_error_line();
+    }
+    for large in ["18446744073709551616", "16EiB", "1e30"] {
+        let r = vlf(&[&missing[..], &[large]].concat()).fails_with(2);
+        let says = format!("got {large}: `{large}` is too large: the largest size is 18446744073709551615 bytes");
+        assert!(r.stderr.lines().next().unwrap_or_default().contains(&says), "{}", r.stderr);
+    }
+    // A duration that is not one says so, naming the forms it may take.
+    let r = vlf(&["cache", "prune", "--cache-dir", s(dir.path()), "--max-age", "1e3"]).fails_with(2);
+    assert!(
+        r.stderr.contains("`1e3` is not a duration: write a number and a unit s, m, h, d or w, such as 30d"),
+        "{}",
+        r.stderr
+    );
     assert_eq!(names_in(dir.path()), ["cube.obj", "cube.vlf"], "something was written");
 }
 
