@@ -866,6 +866,17 @@ fn demo_bakes_verifies_and_traces() {
 
     let r = vlf(&["demo", "--input", s(&dir.path().join("nothing.obj")), "--output-dir", s(&out)]);
     assert!(r.one_error_line().contains("nothing.obj"));
+
+    // A demo that fails removes the output directories it created, and only those.
+    let bad = mesh("bad/nan_vertex.obj");
+    let created = dir.path().join("new/deeper");
+    let r = vlf(&["demo", "--input", s(&bad), "--output-dir", s(&created)]);
+    r.fails_saying(&["nan_vertex.obj"]);
+    assert_eq!(names_in(dir.path()), ["demo"], "a failed demo left its directories behind");
+    // An existing output directory stays, with what it held.
+    let r = vlf(&["demo", "--input", s(&bad), "--output-dir", s(&out)]);
+    r.fails_saying(&["nan_vertex.obj"]);
+    assert_eq!(names_in(&out).len(), 6, "a failed demo changed an existing directory");
 }
 
 // ---------------------------------------------------------------------------------------------

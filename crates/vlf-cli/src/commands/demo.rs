@@ -3,7 +3,7 @@
 use super::stdout_line;
 use crate::args::{BakeArgs, CacheChoice, DemoArgs, DumpArgs, RaysArgs, RenderArgs, TraceArgs, View, WorkArg};
 use anyhow::{Context, Result, bail};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use vlf_bake::params::{DEFAULT_LEAF_SIZE, DEFAULT_MAX_BYTES, DEFAULT_MAX_BYTES_PER_TRIANGLE, DEFAULT_MAX_DEPTH};
 
 /// The bundled default meshes, found through the source tree this binary was built from: the
@@ -13,14 +13,49 @@ const DEMO_MESHES: [&str; 2] = [
     concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/meshes/bunny.obj"),
 ];
 
-/// `vlf-bake demo`: bake, dump, trace and render, as a user would, each step announced.
+/// The files the demo writes in its output directory.
+const DEMO_FILES: [&str; 6] = ["demo.vlf", "outside.rays", "outside.hits", "inside.rays", "inside.hits", "demo.png"];
+
+/// The outermost directory of `dir` (itself or an ancestor) that does not exist yet: the one
+/// `create_dir_all(dir)` creates first, if any.
+fn first_missing(dir: &Path) -> Option<PathBuf> {
+    let mut missing = None;
+    let mut next = Some(dir);
+    while let Some(d) = next.filter(|d| !d.as_os_str().is_empty() && std::fs::symlink_metadata(d).is_err()) {
+        missing = Some(d.to_path_buf());
+        next = d.parent();
+    }
+    missing
+}
+
+/// `vlf-bake demo`: bake, dump, trace and render, as a user would, each step announced. If a step
+/// fails, the output directory is removed again when the demo created it (with the files it
+/// wrote there, and nothing else), so that a failed demo leaves nothing behind.
 pub fn run(a: &DemoArgs) -> Result<()> {
     let inputs: Vec<PathBuf> =
         if a.input.is_empty() { DEMO_MESHES.iter().map(PathBuf::from).collect() } else { a.input.clone() };
     if let Some(missing) = inputs.iter().find(|i| !i.exists()) {
         bail!("demo mesh {} not found; pass --input MESH", missing.display());
     }
+    let created = first_missing(&a.output_dir);
     std::fs::create_dir_all(&a.output_dir).with_context(|| format!("cannot create {}", a.output_dir.display()))?;
+    let result = steps(a, inputs);
+    if let (Err(_), Some(top)) = (&result, created) {
+        for name in DEMO_FILES {
+            let _ = std::fs::remove_file(a.output_dir.join(name));
+        }
+        // Only empty directories go: from the output directory up to the first one created.
+        for dir in a.output_dir.ancestors() {
+            if std::fs::remove_dir(dir).is_err() || dir == top {
+                break;
+            }
+        }
+    }
+    result
+}
+
+/// The demo's steps, in its output directory.
+fn steps(a: &DemoArgs, inputs: Vec<PathBuf>) -> Result<()> {
     let field_path = a.output_dir.join("demo.vlf");
     let names: Vec<String> = inputs.iter().map(|i| i.display().to_string()).collect();
     stdout_line(&format!("1. bake {} (parameters chosen automatically)", names.join(" ")))?;
