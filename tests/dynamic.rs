@@ -589,3 +589,39 @@ fn masks_hide_instances_and_t_is_in_world_units() {
     assert!(scene.closest_hit(&ray, u32::MAX).is_none());
     assert!(scene.remove_instance(b).is_err());
 }
+
+/// Many meshes inserted in one call (`insert_all`, what a scene file's inserts use) give the ids,
+/// the triangles and the hits that inserting them one call at a time gives; a bad mesh among
+/// them is named by its index and nothing is inserted.
+#[test]
+fn inserting_many_meshes_at_once_equals_one_at_a_time() {
+    let fs = fields();
+    let base = &fs.fields[0];
+    let mut rng = Rng::new(41);
+    let meshes: Vec<Vec<[[f64; 3]; 3]>> = (0..12).map(|k| mesh(&mut rng, 1 + k % 5)).collect();
+    let places: Vec<Affine> = (0..12).map(|_| placement(&mut rng, base)).collect();
+    let mut one = vlf_scene::EditedField::new(base.clone());
+    let ranges: Vec<_> = meshes.iter().zip(&places).map(|(m, p)| one.insert(m, p).unwrap()).collect();
+    let mut all = vlf_scene::EditedField::new(base.clone());
+    let parts: Vec<(&[[[f64; 3]; 3]], &Affine)> = meshes.iter().map(Vec::as_slice).zip(&places).collect();
+    assert_eq!(all.insert_all(&parts).unwrap(), ranges);
+    assert_eq!(all.inserted_count(), one.inserted_count());
+    for id in 0..all.id_count() {
+        assert_eq!(all.triangle_local(id), one.triangle_local(id), "triangle {id}");
+    }
+    let (c, r) = base.bounding_sphere();
+    for _ in 0..4000 {
+        let o: [f64; 3] = std::array::from_fn(|i| c[i] - base.origin()[i] + rng.range(-r, r));
+        let d: [f64; 3] = std::array::from_fn(|_| rng.range(-1.0, 1.0));
+        let ray = Ray::new(o.map(|x| x as f32), d.map(|x| x as f32));
+        let key = |h: Option<Hit>| h.map(|h| (h.t.to_bits(), h.prim, h.u.to_bits(), h.v.to_bits()));
+        assert_eq!(key(all.closest_hit_local(&ray, &mut ())), key(one.closest_hit_local(&ray, &mut ())), "{ray:?}");
+    }
+    // A mesh that lands outside the sphere, third of four: named, and nothing inserted.
+    let far = Affine::translation([10.0 * r, 0.0, 0.0]);
+    let bad: Vec<(&[[[f64; 3]; 3]], &Affine)> = vec![parts[0], parts[1], (meshes[2].as_slice(), &far), parts[3]];
+    let before = all.inserted_count();
+    let (k, e) = all.insert_all(&bad).unwrap_err();
+    assert!(k == 2 && matches!(e, EditError::OutsideSphere { .. }), "{k}: {e}");
+    assert_eq!(all.inserted_count(), before);
+}

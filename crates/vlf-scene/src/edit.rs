@@ -317,44 +317,68 @@ impl EditedField {
     /// [`EditError::NotFinite`], [`EditError::OutsideSphere`] (naming the first offending
     /// triangle), [`EditError::TooManyTriangles`], [`EditError::TooLarge`]; nothing is inserted.
     pub fn insert(&mut self, triangles: &[[[f64; 3]; 3]], transform: &Affine) -> Result<Range<u32>, EditError> {
-        if triangles.is_empty() {
-            let end = self.id_count();
-            return Ok(end..end);
-        }
-        if self.id_count() as u64 + triangles.len() as u64 > u32::MAX as u64 {
-            return Err(EditError::TooManyTriangles);
+        let mut ranges = self.insert_all(&[(triangles, transform)]).map_err(|(_, e)| e)?;
+        Ok(ranges.remove(0))
+    }
+
+    /// [`EditedField::insert`] of several meshes, each placed by its own transform, in one pass
+    /// over the field's tiles: inserting `k` meshes one call at a time rebuilds the tiles they
+    /// share `k` times (a scene file of thousands of inserts took minutes), this once. Returns
+    /// each mesh's ids, in order.
+    ///
+    /// # Errors
+    /// As [`EditedField::insert`], with the index of the mesh at fault; nothing is inserted.
+    pub fn insert_all(&mut self, parts: &[(&[[[f64; 3]; 3]], &Affine)]) -> Result<Vec<Range<u32>>, (usize, EditError)> {
+        let total: u64 = parts.iter().map(|(t, _)| t.len() as u64).sum();
+        if self.id_count() as u64 + total > u32::MAX as u64 {
+            return Err((parts.len().saturating_sub(1), EditError::TooManyTriangles));
         }
         let (c, radius) = self.base.bounding_sphere();
-        let mut stored = Vec::with_capacity(triangles.len());
-        for (k, t) in triangles.iter().enumerate() {
-            let v: [[f32; 3]; 3] = t.map(|p| {
-                let w = transform.point(p);
-                std::array::from_fn(|i| (w[i] - c[i]) as f32)
-            });
-            if v.iter().flatten().any(|x| !x.is_finite()) {
-                return Err(EditError::NotFinite { triangle: k });
-            }
-            let distance =
-                v.iter().map(|p| p.iter().map(|&x| (x as f64) * (x as f64)).sum::<f64>().sqrt()).fold(0.0, f64::max);
-            if !(distance <= radius) {
-                return Err(EditError::OutsideSphere { triangle: k, distance, radius });
-            }
-            stored.push(TriangleRecord { v });
-        }
-        let base = self.base.triangle_count();
-        let overlay = self.overlay.take().unwrap_or_else(|| Overlay::empty(self.base.clone()));
-        let removed = &self.removed;
-        let dead = move |k: u32| bit(removed, base + k);
-        match overlay.insert(&stored, &dead) {
-            Ok((o, local)) => {
-                self.overlay = Some(o);
-                Ok(base + local.start..base + local.end)
-            }
-            Err((o, TooLarge)) => {
-                self.overlay = Some(o);
-                Err(EditError::TooLarge)
+        let mut stored = Vec::with_capacity(total as usize);
+        for (part, (triangles, transform)) in parts.iter().enumerate() {
+            for (k, t) in triangles.iter().enumerate() {
+                let v: [[f32; 3]; 3] = t.map(|p| {
+                    let w = transform.point(p);
+                    std::array::from_fn(|i| (w[i] - c[i]) as f32)
+                });
+                if v.iter().flatten().any(|x| !x.is_finite()) {
+                    return Err((part, EditError::NotFinite { triangle: k }));
+                }
+                let distance = v
+                    .iter()
+                    .map(|p| p.iter().map(|&x| (x as f64) * (x as f64)).sum::<f64>().sqrt())
+                    .fold(0.0, f64::max);
+                if !(distance <= radius) {
+                    return Err((part, EditError::OutsideSphere { triangle: k, distance, radius }));
+                }
+                stored.push(TriangleRecord { v });
             }
         }
+        let mut next = self.id_count();
+        if !stored.is_empty() {
+            let base = self.base.triangle_count();
+            let overlay = self.overlay.take().unwrap_or_else(|| Overlay::empty(self.base.clone()));
+            let removed = &self.removed;
+            let dead = move |k: u32| bit(removed, base + k);
+            match overlay.insert(&stored, &dead) {
+                Ok((o, local)) => {
+                    self.overlay = Some(o);
+                    next = base + local.start;
+                }
+                Err((o, TooLarge)) => {
+                    self.overlay = Some(o);
+                    return Err((parts.len().saturating_sub(1), EditError::TooLarge));
+                }
+            }
+        }
+        Ok(parts
+            .iter()
+            .map(|(t, _)| {
+                let r = next..next + t.len() as u32;
+                next = r.end;
+                r
+            })
+            .collect())
     }
 
     /// The closest hit of a ray given relative to [`Field::origin`], over the live triangles:

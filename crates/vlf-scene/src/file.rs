@@ -256,10 +256,11 @@ impl SceneFile {
                 for name in &spec.remove {
                     f.remove_object(Object::Name(name)).map_err(|e| ctx.fail(i, "remove", e.to_string()))?;
                 }
-                for (k, ins) in spec.insert.iter().enumerate() {
-                    f.insert(&read[ins.mesh.as_path()], &ins.transform)
-                        .map_err(|e| ctx.fail(i, "insert", format!("[{k}] {}: {e}", ins.mesh.display())))?;
-                }
+                // Every insert of the instance in one pass over the field's tiles.
+                let parts: Vec<(&[[[f64; 3]; 3]], &Affine)> =
+                    spec.insert.iter().map(|ins| (read[ins.mesh.as_path()].as_slice(), &ins.transform)).collect();
+                f.insert_all(&parts)
+                    .map_err(|(k, e)| ctx.fail(i, "insert", format!("[{k}] {}: {e}", spec.insert[k].mesh.display())))?;
                 scene.add_field(f)
             };
             scene.add_instance(id, spec.transform, spec.mask).map_err(|e| ctx.fail(i, "field", e.to_string()))?;
