@@ -41,6 +41,17 @@ pub fn check(tiles: u32, threads: usize) -> Result<(), BakeError> {
     Ok(())
 }
 
+/// The bytes this process can still allocate, as far as the operating system tells (Linux's
+/// `/proc`): the memory available without swapping, and under an address-space limit
+/// (`ulimit -v`) the room left in it, whichever is less. `None` where nothing is known. For checks
+/// of a piece of work's memory before it starts, as [`check`] does for the tile grids.
+pub fn available() -> Option<u64> {
+    match (available_memory(), available_address_space()) {
+        (Some(m), Some(a)) => Some(m.min(a)),
+        (m, a) => m.or(a),
+    }
+}
+
 /// The value in kB of the line of `/proc` file `text` that starts with `key`, in bytes.
 fn kb_field(text: &str, key: &str) -> Option<u64> {
     let line = text.lines().find(|l| l.starts_with(key))?;
