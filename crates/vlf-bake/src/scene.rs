@@ -56,7 +56,28 @@ pub enum ImportError {
     NoTriangles { what: String, detail: String },
     #[error("the scene has more than {max} triangles, the format's limit")]
     TooManyTriangles { max: u64 },
+    /// Checked before the triangles are made: a file whose nodes instance its meshes into more
+    /// triangles (with those of earlier inputs) than a field may hold.
+    #[error(
+        "{path}: its nodes instance {triangles} triangles{}, more than {max}, the format's limit",
+        if *.earlier > 0 { format!(" (and the inputs before it {})", .earlier) } else { String::new() }
+    )]
+    InstancesTooManyTriangles { path: PathBuf, triangles: u64, earlier: u64, max: u64 },
+    /// Checked before the triangles are made: a file whose nodes instance more triangles than
+    /// this process can hold while importing them ([`IMPORT_BYTES_PER_TRIANGLE`] each).
+    #[error(
+        "{path}: its nodes instance {triangles} triangles, which need {need} of memory to import, but {available} is \
+         available"
+    )]
+    NotEnoughMemory { path: PathBuf, triangles: u64, need: String, available: String },
 }
+
+/// The most bytes of memory the import holds for one triangle, until [`SceneBuilder::finish`]
+/// returns: its world-space vertices and provenance (80 bytes, reserved exactly before a glTF
+/// file's triangles are made), then in `finish` its entry in the duplicate map (41 bytes, in a
+/// table up to 16/7 times as large as its entries) and its stored record and provenance (44
+/// bytes, in vectors up to twice as large as their contents).
+pub const IMPORT_BYTES_PER_TRIANGLE: u64 = 80 + 41 * 16 / 7 + 2 * 44;
 
 /// What an importer describes about one source of triangles.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -315,6 +336,12 @@ impl SceneBuilder {
         }
         self.world.push((v, ProvenanceRecord { source, index: index.min(u32::MAX as u64) as u32 }));
         Ok(())
+    }
+
+    /// Reserves room for `additional` more triangles at once, instead of growing by doubling as
+    /// they are pushed; `Err` if the memory cannot be had.
+    pub fn try_reserve(&mut self, additional: usize) -> Result<(), std::collections::TryReserveError> {
+        self.world.try_reserve_exact(additional)
     }
 
     /// Records a skipped point or line primitive.

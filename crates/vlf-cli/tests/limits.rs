@@ -295,3 +295,79 @@ fn the_limits_table_is_what_the_commands_do() {
         assert_eq!(names_in(dir.path()), ["field.vlf"], "`{command_line}` left files behind");
     }
 }
+
+/// Writes `dir/NAME.gltf` and its buffer `dir/NAME.bin`: `nodes` nodes each instancing one mesh of
+/// `primitives` primitives, all reading the same accessors. `sparse` makes the positions 2²⁴ − 1
+/// zeros from a sparse accessor of 16 bytes (5,592,405 triangles a primitive, every one of zero
+/// area); else they are 256 points of a circle read by a 1,002-index strip (1,000 triangles).
+fn expanding_gltf(dir: &Path, name: &str, nodes: usize, primitives: usize, sparse: bool) -> PathBuf {
+    let (buffer, accessors, views, mode) = if sparse {
+        let mut bin = vec![0u8; 4];
+        bin.extend([1.0f32, 2.0, 3.0].iter().flat_map(|c| c.to_le_bytes()));
+        let accessors = r#"[{"componentType":5126,"count":16777215,"type":"VEC3","sparse":{"count":1,
+            "indices":{"bufferView":0,"componentType":5121},"values":{"bufferView":1}}}]"#;
+        (bin, accessors, r#"[{"buffer":0,"byteLength":1},{"buffer":0,"byteOffset":4,"byteLength":12}]"#, 4)
+    } else {
+        let mut bin: Vec<u8> = (0..256)
+            .flat_map(|k| {
+                let a = k as f32 * std::f32::consts::TAU / 256.0;
+                [a.cos(), a.sin(), 0.0].into_iter().flat_map(f32::to_le_bytes)
+            })
+            .collect();
+        bin.extend((0..1002u32).map(|k| (k % 256) as u8));
+        let accessors = r#"[{"bufferView":0,"componentType":5126,"count":256,"type":"VEC3"},
+            {"bufferView":1,"componentType":5121,"count":1002,"type":"SCALAR"}]"#;
+        (bin, accessors, r#"[{"buffer":0,"byteLength":3072},{"buffer":0,"byteOffset":3072,"byteLength":1002}]"#, 5)
+    };
+    let indices = if sparse { "" } else { r#","indices":1"# };
+    let primitive = format!(r#"{{"attributes":{{"POSITION":0}}{indices},"mode":{mode}}}"#);
+    let json = format!(
+        r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[{}]}}],"nodes":[{}],
+        "meshes":[{{"primitives":[{}]}}],"accessors":{accessors},"bufferViews":{views},
+        "buffers":[{{"uri":"{name}.bin","byteLength":{}}}]}}"#,
+        (0..nodes).map(|k| k.to_string()).collect::<Vec<_>>().join(","),
+        vec![r#"{"mesh":0}"#; nodes].join(","),
+        vec![primitive; primitives].join(","),
+        buffer.len()
+    );
+    std::fs::write(dir.join(format!("{name}.bin")), &buffer).unwrap();
+    let path = dir.join(format!("{name}.gltf"));
+    std::fs::write(&path, json).unwrap();
+    path
+}
+
+#[test]
+fn a_gltf_that_instances_more_triangles_than_fit_is_refused_before_importing() {
+    let dir = tempdir();
+    let out = dir.path().join("out.vlf");
+    // 45 nodes × 40 primitives × 5,592,405 triangles: 10¹⁰ triangles from 4 KB of JSON.
+    let huge = expanding_gltf(dir.path(), "huge", 45, 40, true);
+    assert!(std::fs::metadata(&huge).unwrap().len() < 8 << 10);
+    let start = std::time::Instant::now();
+    let r = vlf_with_ulimit("-v 4194304", &["bake", s(&huge), "-o", s(&out), "--directions", "33", "--tiles", "16"]);
+    assert_eq!(r.code, 1, "{}", r.stderr);
+    assert_eq!(
+        r.one_error_line(),
+        format!(
+            "error: {}: its nodes instance 10066329000 triangles, more than 4294967295, the format's limit",
+            huge.display()
+        )
+    );
+    assert!(start.elapsed().as_secs() < 10, "refused after {:?}", start.elapsed());
+    // The review's case: 1,000 nodes × 100 primitives reuse one 1,000-triangle strip, 10⁸
+    // triangles (about 26 GB to import) from 20 KB, in an address space of 4 GiB.
+    let many = expanding_gltf(dir.path(), "many", 1000, 100, false);
+    assert!(std::fs::metadata(&many).unwrap().len() < 32 << 10);
+    let start = std::time::Instant::now();
+    let r = vlf_with_ulimit("-v 4194304", &["bake", s(&many), "-o", s(&out), "--directions", "33", "--tiles", "16"]);
+    assert_eq!(r.code, 1, "{}", r.stderr);
+    let need = gib(100_000_000 * vlf_bake::scene::IMPORT_BYTES_PER_TRIANGLE);
+    let expected = format!(
+        "error: {}: its nodes instance 100000000 triangles, which need {need} of memory to import, but ",
+        many.display()
+    );
+    let line = r.one_error_line();
+    assert!(line.starts_with(&expected) && line.ends_with(" is available"), "{line}");
+    assert!(start.elapsed().as_secs() < 10, "refused after {:?}", start.elapsed());
+    assert_eq!(names_in(dir.path()), ["huge.bin", "huge.gltf", "many.bin", "many.gltf"], "something was written");
+}

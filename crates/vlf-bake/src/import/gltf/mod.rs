@@ -21,6 +21,7 @@
 //! buffer before handing it to the reader.
 
 mod accessor;
+mod expand;
 mod records;
 mod transform;
 
@@ -129,9 +130,11 @@ pub(super) fn import(
 
     import_materials(builder, &ctx, &document);
 
+    // The walk first (the nodes in order, with their world transforms), then the triangles it
+    // will make are counted and judged (`expand`), and only then are they made.
     let nodes: Vec<gl::Node> = document.nodes().collect();
     let mut visited = vec![false; nodes.len()];
-    let mut mesh_used = vec![false; document.meshes().len()];
+    let mut visits: Vec<(usize, Mat4)> = Vec::new();
     let mut stack: Vec<(usize, Mat4)> = roots.iter().rev().map(|&i| (i, IDENTITY)).collect();
     while let Some((index, parent)) = stack.pop() {
         let node =
@@ -142,18 +145,25 @@ pub(super) fn import(
             )));
         }
         let world = mul(&parent, &local_matrix(node.transform()));
+        visits.push((index, world));
+        let children: Vec<usize> = node.children().map(|c| c.index()).collect();
+        stack.extend(children.into_iter().rev().map(|c| (c, world)));
+    }
+    let order: Vec<usize> = visits.iter().map(|&(index, _)| index).collect();
+    expand::check(builder, path, &nodes, document.meshes().len(), &order, &buffers)?;
+
+    let mut mesh_used = vec![false; document.meshes().len()];
+    for (index, world) in visits {
         import_camera_and_light(builder, &ctx, document.as_json(), index, &world);
-        if let Some(mesh) = node.mesh() {
+        if let Some(mesh) = nodes[index].mesh() {
             mesh_used[mesh.index()] = true;
-            if node.skin().is_some() {
+            if nodes[index].skin().is_some() {
                 ctx.warn(builder, format!("node {index} is skinned; its mesh is imported in its bind pose"));
             }
             for primitive in mesh.primitives() {
                 import_primitive(builder, &ctx, &buffers, index, &world, &mesh, &primitive)?;
             }
         }
-        let children: Vec<usize> = node.children().map(|c| c.index()).collect();
-        stack.extend(children.into_iter().rev().map(|c| (c, world)));
     }
     let unused = mesh_used.iter().filter(|&&u| !u).count();
     if unused > 0 {
@@ -556,18 +566,10 @@ fn import_primitive(
     }
     let n = indices.as_ref().map_or(positions.len(), Vec::len);
     let vertex = |k: usize| positions[indices.as_ref().map_or(k, |ix| ix[k] as usize)];
-    let triangles = match mode {
-        Mode::Triangles => {
-            if !n.is_multiple_of(3) {
-                ctx.warn(
-                    builder,
-                    format!("{location}: {n} vertices is not a multiple of 3; the last {} are ignored", n % 3),
-                );
-            }
-            n / 3
-        }
-        _ => n.saturating_sub(2),
-    };
+    if mode == Mode::Triangles && !n.is_multiple_of(3) {
+        ctx.warn(builder, format!("{location}: {n} vertices is not a multiple of 3; the last {} are ignored", n % 3));
+    }
+    let triangles = expand::triangles_of(mode, n as u64) as usize;
     if triangles == 0 {
         return Ok(());
     }
