@@ -371,3 +371,37 @@ fn a_gltf_that_instances_more_triangles_than_fit_is_refused_before_importing() {
     assert!(start.elapsed().as_secs() < 10, "refused after {:?}", start.elapsed());
     assert_eq!(names_in(dir.path()), ["huge.bin", "huge.gltf", "many.bin", "many.gltf"], "something was written");
 }
+
+#[test]
+fn a_scene_that_flattens_past_the_memory_is_refused_before_rendering() {
+    let dir = tempdir();
+    let field = bunny(dir.path());
+    let triangles = vlf_runtime::Field::open(&field).unwrap().triangle_count() as u64;
+    let png = dir.path().join("out.png");
+    let scene_of = |name: &str, instances: u64| {
+        let path = dir.path().join(name);
+        let one = r#"{"field":"bunny.vlf"}"#;
+        std::fs::write(&path, format!(r#"{{"instances":[{}]}}"#, vec![one; instances as usize].join(","))).unwrap();
+        path
+    };
+    // The review's case, in an address space of 4 GiB: 20,000 bunnies flattened for the renderer
+    // are 7·10⁷ triangles, about 12.6 GiB with smoothing.
+    let many = scene_of("many.json", 20_000);
+    let start = std::time::Instant::now();
+    let r = vlf_with_ulimit(
+        "-v 4194304",
+        &["render", "--scene", s(&many), "-o", s(&png), "--width", "64", "--height", "64"],
+    );
+    assert_eq!(r.code, 1, "{}", r.stderr);
+    let expected = format!(
+        "error: scene file {}: its 20000 instances hold {} triangles, which the renderer copies to world space in {} of \
+         memory, but ",
+        many.display(),
+        20_000 * triangles,
+        gib(20_000 * triangles * 184)
+    );
+    let line = r.one_error_line();
+    assert!(line.starts_with(&expected) && line.ends_with(" is available"), "{line}");
+    assert!(start.elapsed().as_secs() < 20, "refused after {:?}", start.elapsed());
+    assert_eq!(names_in(dir.path()), ["bunny.vlf", "many.json"], "something was written");
+}

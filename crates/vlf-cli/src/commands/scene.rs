@@ -11,6 +11,7 @@ use std::path::Path;
 use std::time::Instant;
 use vlf_bake::Progress;
 use vlf_bake::atomic::write_atomically;
+use vlf_bake::params::human_bytes;
 use vlf_render::{SceneBounds, SceneOptions};
 use vlf_runtime::{Hit, Ray};
 use vlf_scene::{Affine, Scene, SceneFile};
@@ -48,6 +49,42 @@ pub fn trace(a: &TraceArgs, scene_path: &Path, rays: &[Ray]) -> Result<(Vec<Hit>
             .with_context(|| format!("cannot write instance ids file {}", path.display()))?;
     }
     Ok((hits, seconds))
+}
+
+/// Bytes the renderer holds per triangle of the flattened scene (`vlf_render::Scene::
+/// from_instances`): its world-space vertices (36) and surface (4); with smoothing, its corner
+/// normals (36) and, while they are computed, its face normals (48) and its corners' sort keys (60).
+const FLAT_BYTES_PER_TRIANGLE: (u64, u64) = (36 + 4, 36 + 4 + 36 + 48 + 60);
+
+/// Refuses a scene whose flattening for the renderer (every instance's triangles copied to world
+/// space, numbered as [`Scene::flat`] numbers them) passes the 2³² − 1 triangle ids or needs more
+/// memory than this process can still allocate: checked before any of it is made, since a few
+/// megabytes of scene file can instance one field hundreds of thousands of times.
+fn check_flattened(scene: &Scene, path: &Path, smooth: bool) -> Result<()> {
+    let fields = scene.fields();
+    let triangles: u64 = scene
+        .instance_ids()
+        .filter_map(|id| scene.instance(id))
+        .filter_map(|info| fields.get(info.field.0 as usize))
+        .map(|f| f.id_count() as u64)
+        .sum();
+    let instances = scene.instance_count();
+    let what = format!("scene file {}: its {instances} instances hold {triangles} triangles", path.display());
+    if triangles > u32::MAX as u64 {
+        bail!("{what}, more than the {} a picture can number (u32 triangle ids)", u32::MAX);
+    }
+    let per = if smooth { FLAT_BYTES_PER_TRIANGLE.1 } else { FLAT_BYTES_PER_TRIANGLE.0 };
+    let need = triangles.saturating_mul(per);
+    if let Some(available) = vlf_bake::memory::available()
+        && need > available
+    {
+        bail!(
+            "{what}, which the renderer copies to world space in {} of memory, but {} is available",
+            human_bytes(need),
+            human_bytes(available)
+        );
+    }
+    Ok(())
 }
 
 /// The transform of a moved instance at animation time `s` (0 at the first frame, 1 at the
@@ -104,6 +141,7 @@ pub fn render(a: &RenderArgs) -> Result<()> {
     let bounds = SceneBounds::of_box(min, max);
     let s = setup(a, &[], &[], &bounds, &path.display().to_string(), frames)?;
     let options = SceneOptions { smooth: !a.flat, ..SceneOptions::default() };
+    check_flattened(&scene, path, options.smooth)?;
     let bar = Bar::new(a.quiet || a.json);
     bar.begin("rendering rows", s.settings.height as u64 * frames as u64);
     let start = Instant::now();
