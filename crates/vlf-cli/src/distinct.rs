@@ -61,9 +61,18 @@ fn normalised(path: &Path) -> PathBuf {
     }
 }
 
-/// Refuses an output that is the same file as one of `inputs` or as an earlier output; each
-/// path comes with the name of its flag or argument (`-o/--output`, `--rays`, `INPUT`).
-pub fn check_outputs(inputs: &[(&str, &Path)], outputs: &[(&str, &Path)]) -> Result<(), BadUsage> {
+/// Refuses an output that is the same file as one of `inputs` or as an earlier output (a
+/// [`BadUsage`]); each path comes with the name of its flag or argument (`-o/--output`, `--rays`,
+/// `INPUT`). Then refuses an output whose directory cannot take a new file
+/// ([`crate::limits::check_writable`]): both before the work, so that no command works for
+/// minutes, or writes one output, only to fail on another.
+pub fn check_outputs(inputs: &[(&str, &Path)], outputs: &[(&str, &Path)]) -> anyhow::Result<()> {
+    check_distinct(inputs, outputs)?;
+    crate::limits::check_writable(outputs)
+}
+
+/// The first half of [`check_outputs`].
+fn check_distinct(inputs: &[(&str, &Path)], outputs: &[(&str, &Path)]) -> Result<(), BadUsage> {
     let named = |list: &[(&str, &Path)]| -> Vec<(String, String, Option<Identity>)> {
         list.iter().map(|(flag, p)| (flag.to_string(), p.display().to_string(), identity(p))).collect()
     };

@@ -47,6 +47,30 @@ pub fn check_disk(path: &Path, needed: u64, at_most: bool, what: &str) -> Result
     Ok(())
 }
 
+/// Refuses outputs whose directory cannot take a new file: one that does not exist, a file where
+/// it should be, no permission to write, a read-only file system, a path that is a directory.
+/// Creating (and at once removing) a file there is the one honest test. `outputs` pair each
+/// path with its flag (`-o/--output`). An existing device or FIFO (`/dev/null`) is left alone.
+pub fn check_writable(outputs: &[(&str, &Path)]) -> Result<()> {
+    for (flag, path) in outputs {
+        if crate::values::is_special_file(path) {
+            continue;
+        }
+        if path.is_dir() {
+            bail!("cannot write {flag} {}: it is a directory", path.display());
+        }
+        let dir = parent_dir(path);
+        let probe = dir.join(format!(".vlf-bake-write-test-{}.tmp", std::process::id()));
+        match std::fs::OpenOptions::new().write(true).create_new(true).open(&probe) {
+            Ok(_) => {
+                let _ = std::fs::remove_file(&probe);
+            }
+            Err(e) => bail!("cannot write {flag} {}: cannot create a file in {}: {e}", path.display(), dir.display()),
+        }
+    }
+    Ok(())
+}
+
 /// Refuses to go on if `needed` bytes of memory are more than [`memory_budget`]. `what` names the
 /// work and its parts (`a 20000×20000 picture (framebuffer 16.4 GiB, …)`).
 pub fn check_memory(needed: u64, what: &str) -> Result<()> {

@@ -386,3 +386,32 @@ fn an_output_that_is_an_input_or_another_output_is_a_bad_command_line() {
     #[cfg(unix)]
     in_dir(&["render", "bunny.vlf", "-o", "/dev/null", "--work-image", "/dev/null", "--width", "8", "-q"]).ok();
 }
+
+/// An output that cannot be written (its directory missing, a directory itself, a file system
+/// that takes no new file) fails before the work, naming its flag, and no other output is
+/// written: a bake used to import and bake first, and `--report` or `--work-image` into a
+/// missing directory failed only after the field or the picture was written.
+#[test]
+fn an_output_that_cannot_be_written_fails_before_the_work_and_writes_nothing() {
+    let dir = tempdir();
+    let d = dir.path();
+    let in_dir = |args: &[&str]| common::run(common::command().current_dir(d).args(args));
+    std::fs::write(d.join("t.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    box_field(d, "box", [-1.0; 3], [1.0; 3]);
+    in_dir(&["rays", "box.vlf", "-o", "r.bin", "--width", "8", "--height", "8", "-q"]).ok();
+    std::fs::create_dir(d.join("sub")).unwrap();
+    let before = names_in(d);
+    let cases: [(&[&str], &[&str]); 6] = [
+        (&["bake", "t.obj", "-o", "nodir/x.vlf"], &["-o/--output nodir/x.vlf", "nodir"]),
+        (&["bake", "t.obj", "-o", "sub"], &["-o/--output sub", "is a directory"]),
+        (&["bake", "t.obj", "-o", "f.vlf", "--report", "nodir/r.json"], &["--report nodir/r.json"]),
+        (&["render", "box.vlf", "-o", "x.png", "--work-image", "nodir/w.png", "--width", "8"], &["--work-image"]),
+        (&["trace", "box.vlf", "--rays", "r.bin", "-o", "nodir/h.bin"], &["-o/--output nodir/h.bin"]),
+        (&["pack", "box.vlf", "-o", "nodir/p.vlf"], &["-o/--output nodir/p.vlf"]),
+    ];
+    for (args, says) in cases {
+        let r = in_dir(args).fails_with(1);
+        r.fails_saying(says);
+        assert_eq!(names_in(d), before, "`{}` wrote a file", r.what);
+    }
+}
