@@ -129,6 +129,17 @@ fn impossible_cameras_and_picture_names_are_refused() {
         "--up 0,2,0 is along the line of sight from --eye to the target, so it gives the picture no up: give a \
          direction across it",
     );
+    // An eye whose line of sight overflows or underflows is named for that, not for its up.
+    bad_usage(
+        render(&["--eye", "1e308,0,0"]),
+        "--eye 1e308,0.0,0.0 is too far from the target for double precision (their distance is inf): no line of \
+         sight can be aimed; place them between about 1e-150 and 1e150 apart",
+    );
+    bad_usage(
+        render(&["--eye", "1e-300,0,0", "--target", "0,0,0"]),
+        "--eye 1e-300,0.0,0.0 is too close to the target for double precision (their distance is 0e0): no line \
+         of sight can be aimed; place them between about 1e-150 and 1e150 apart",
+    );
     for (flag, name) in [("-o", "x.jpg"), ("--output", "picture"), ("--work-image", "work.jpeg")] {
         let path = dir.path().join(name);
         let output = if flag == "--work-image" { s(&png) } else { s(&path) };

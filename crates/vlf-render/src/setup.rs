@@ -80,7 +80,7 @@ pub struct CameraChoice {
 }
 
 /// Why the camera asked for cannot be used.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub enum CameraError {
     /// The field has no camera with this number.
     NoSuchCamera { index: usize, count: usize },
@@ -90,6 +90,12 @@ pub enum CameraError {
     EyeIsTarget,
     /// An eye camera's up direction is zero or along its line of sight: it gives no image up.
     UpAlongSight,
+    /// An eye camera's line of sight has no direction in f64: the eye and the target are so far
+    /// apart that their distance overflows, or so close that it underflows to zero.
+    SightOutOfRange {
+        /// The distance from the eye to the target as f64 computes it (infinite or zero).
+        distance: f64,
+    },
 }
 
 impl fmt::Display for CameraError {
@@ -99,6 +105,9 @@ impl fmt::Display for CameraError {
             CameraError::Degenerate { index } => write!(f, "camera {index} cannot be used: its frame is degenerate"),
             CameraError::EyeIsTarget => write!(f, "the eye and the target are the same point"),
             CameraError::UpAlongSight => write!(f, "the up direction is zero or along the line of sight"),
+            CameraError::SightOutOfRange { distance } => {
+                write!(f, "the distance from the eye to the target ({distance:e}) gives the line of sight no direction")
+            }
         }
     }
 }
@@ -137,8 +146,10 @@ pub fn choose_camera(
             if eye == target {
                 return Err(CameraError::EyeIsTarget);
             }
-            let sight = normalize(sub(target, eye));
-            let across = sight.zip(normalize(request.up)).map(|(s, u)| length(cross(s, u)));
+            let Some(sight) = normalize(sub(target, eye)) else {
+                return Err(CameraError::SightOutOfRange { distance: length(sub(target, eye)) });
+            };
+            let across = normalize(request.up).map(|u| length(cross(sight, u)));
             if across.filter(|&a| a > 1e-9).is_none() {
                 return Err(CameraError::UpAlongSight);
             }
@@ -275,6 +286,15 @@ mod tests {
         for up in [[0.0, 1.0, 0.0], [0.0, -3.0, 0.0], [0.0, 0.0, 0.0]] {
             let above = CameraRequest { eye: Some([0.0, 9.0, 0.0]), up, ..request() };
             assert_eq!(choose_camera(&above, &cameras, &BOUNDS), Err(CameraError::UpAlongSight), "{up:?}");
+        }
+        // An eye so far from (or so near) the target that the line of sight overflows (or
+        // underflows) is named for that, not for its up direction.
+        for (eye, target) in [([1e308, 0.0, 0.0], [-1e308, 0.0, 0.0]), ([1e-300, 0.0, 0.0], [0.0; 3])] {
+            let far = CameraRequest { eye: Some(eye), target: Some(target), ..request() };
+            assert!(
+                matches!(choose_camera(&far, &cameras, &BOUNDS), Err(CameraError::SightOutOfRange { .. })),
+                "{eye:?}"
+            );
         }
         let tilted = CameraRequest { eye: Some([0.0, 9.0, 0.0]), up: [0.0, 0.0, -1.0], ..request() };
         assert!(choose_camera(&tilted, &cameras, &BOUNDS).is_ok());

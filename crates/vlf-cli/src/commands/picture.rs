@@ -106,6 +106,13 @@ pub(super) fn setup(
                 a.up.map(|c| c.to_string()).join(",")
             ))
             .into(),
+            CameraError::SightOutOfRange { distance } => BadUsage(format!(
+                "--eye {} is {} the target for double precision (their distance is {distance:e}): no line of sight \
+                 can be aimed; place them between about 1e-150 and 1e150 apart",
+                a.eye.map_or_else(String::new, |e| e.map(|c| format!("{c:?}")).join(",")),
+                if distance == 0.0 { "too close to" } else { "too far from" }
+            ))
+            .into(),
         })?;
     // Before anything of the picture's size is allocated.
     let (frame_bytes, picture_bytes) =
