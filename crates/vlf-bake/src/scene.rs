@@ -332,7 +332,7 @@ impl SceneBuilder {
             return Ok(());
         }
         if self.world.len() as u64 >= u32::MAX as u64 {
-            return Err(ImportError::TooManyTriangles { max: u32::MAX as u64 - 1 });
+            return Err(ImportError::TooManyTriangles { max: u32::MAX as u64 });
         }
         self.world.push((v, ProvenanceRecord { source, index: index.min(u32::MAX as u64) as u32 }));
         Ok(())
