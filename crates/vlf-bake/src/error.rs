@@ -31,7 +31,7 @@ pub enum BakeError {
     /// The bake's buffers for its tile grids would not fit the memory this machine has free
     /// (checked before any work).
     #[error(
-        "baking {tiles} × {tiles} tiles on {threads} thread(s) needs about {need} of memory (a direction's buffers take about {per_tile} bytes a tile on each thread), and {available} is available; lower --tiles or --threads"
+        "baking {tiles} × {tiles} tiles on {threads} thread(s) needs about {need} of memory (a direction's buffers take about {per_tile} bytes a tile on each thread), but {allowed}; lower --tiles or --threads"
     )]
-    NotEnoughMemory { tiles: u32, threads: usize, per_tile: u64, need: String, available: String },
+    NotEnoughMemory { tiles: u32, threads: usize, per_tile: u64, need: String, allowed: String },
 }

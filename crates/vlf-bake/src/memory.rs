@@ -18,60 +18,89 @@ pub const TOUCHED_PER_TILE: u64 = 24;
 /// Bytes of address space a bake reserves per tile of one direction, per thread.
 pub const RESERVED_PER_TILE: u64 = 56;
 
-/// `Err` if baking `tiles × tiles` grids on `threads` threads needs more memory than this
-/// process can use (as far as the operating system tells: Linux's `/proc`; elsewhere nothing is
-/// checked, and a failed allocation is still an error, not an abort).
+/// `Err` if baking `tiles × tiles` grids on `threads` threads needs more memory than [`budget`]
+/// allows, or more address space than an address-space limit leaves (as far as the operating
+/// system tells: Linux's `/proc`; a failed allocation is still an error, not an abort).
 pub fn check(tiles: u32, threads: usize) -> Result<(), BakeError> {
     let grid = tiles as u64 * tiles as u64 * threads.max(1) as u64;
-    let limits = [(TOUCHED_PER_TILE, available_memory()), (RESERVED_PER_TILE, available_address_space())];
-    for (per_tile, available) in limits {
+    let (budget, why) = budget();
+    let address_space = address_space().map(|(limit, used)| {
+        let why = format!("what the address-space limit of {} (ulimit -v) leaves", human_bytes(limit));
+        (limit.saturating_sub(used), why)
+    });
+    for (per_tile, (allowed, why)) in [(TOUCHED_PER_TILE, Some((budget, why))), (RESERVED_PER_TILE, address_space)]
+        .into_iter()
+        .filter_map(|(per_tile, limit)| Some((per_tile, limit?)))
+    {
         let need = grid.saturating_mul(per_tile);
-        if let Some(available) = available
-            && need > available
-        {
+        if need > allowed {
             return Err(BakeError::NotEnoughMemory {
                 tiles,
                 threads: threads.max(1),
                 per_tile,
                 need: human_bytes(need),
-                available: human_bytes(available),
+                allowed: format!("{} may be used ({why})", human_bytes(allowed)),
             });
         }
     }
     Ok(())
 }
 
-/// The bytes this process can still allocate, as far as the operating system tells (Linux's
-/// `/proc`): the memory available without swapping, and under an address-space limit
-/// (`ulimit -v`) the room left in it, whichever is less. `None` where nothing is known. For checks
-/// of a piece of work's memory before it starts, as [`check`] does for the tile grids.
-pub fn available() -> Option<u64> {
-    match (available_memory(), available_address_space()) {
-        (Some(m), Some(a)) => Some(m.min(a)),
-        (m, a) => m.or(a),
+/// The most memory a piece of work may plan to use, and where that comes from (for messages):
+/// three quarters of what the system has available (`MemAvailable` on Linux, else a fixed 4 GiB),
+/// and no more than the process's address-space limit (`ulimit -v`) leaves. The one rule every
+/// up-front memory check uses: the tile grids here, the glTF import, the command line's pictures
+/// and flattened scenes.
+pub fn budget() -> (u64, String) {
+    budget_of(available_memory(), address_space())
+}
+
+/// The share of what the system reports available that [`budget`] plans on.
+const MEMORY_SHARE: (u64, u64) = (3, 4);
+
+/// Where `/proc/meminfo` does not exist: the memory assumed available.
+const ASSUMED_AVAILABLE: u64 = 4 << 30;
+
+/// [`budget`] for what the system reports: `MemAvailable`, and the address-space limit and what
+/// is used of it.
+fn budget_of(available: Option<u64>, address_space: Option<(u64, u64)>) -> (u64, String) {
+    let (available, source) = match available {
+        Some(a) => (a, "available"),
+        None => (ASSUMED_AVAILABLE, "assumed available"),
+    };
+    let share = available / MEMORY_SHARE.1 * MEMORY_SHARE.0;
+    let mut why = format!("three quarters of the {} {source}", human_bytes(available));
+    let mut budget = share;
+    if let Some((limit, used)) = address_space {
+        let left = limit.saturating_sub(used);
+        if left < budget {
+            budget = left;
+            why = format!("what the address-space limit of {} (ulimit -v) leaves", human_bytes(limit));
+        }
     }
+    (budget, why)
 }
 
-/// The value in kB of the line of `/proc` file `text` that starts with `key`, in bytes.
-fn kb_field(text: &str, key: &str) -> Option<u64> {
-    let line = text.lines().find(|l| l.starts_with(key))?;
-    let kb: u64 = line[key.len()..].split_whitespace().next()?.parse().ok()?;
-    Some(kb.saturating_mul(1024))
-}
-
-/// The memory the system can give without swapping (`MemAvailable`).
+/// `MemAvailable` of `/proc/meminfo`: what can be allocated without swapping.
 fn available_memory() -> Option<u64> {
-    kb_field(&std::fs::read_to_string("/proc/meminfo").ok()?, "MemAvailable:")
+    kilobytes_of(&std::fs::read_to_string("/proc/meminfo").ok()?, "MemAvailable:")
 }
 
-/// The address space this process may still map: its soft limit (`ulimit -v`) less what it maps
-/// now; `None` without a limit.
-fn available_address_space() -> Option<u64> {
+/// The soft address-space limit (`ulimit -v`) if there is one, and the address space the process
+/// already uses (`VmSize`), from `/proc/self/limits` and `/proc/self/status`.
+fn address_space() -> Option<(u64, u64)> {
     let limits = std::fs::read_to_string("/proc/self/limits").ok()?;
     let line = limits.lines().find(|l| l.starts_with("Max address space"))?;
-    let soft: u64 = line["Max address space".len()..].split_whitespace().next()?.parse().ok()?;
-    let mapped = kb_field(&std::fs::read_to_string("/proc/self/status").ok()?, "VmSize:")?;
-    Some(soft.saturating_sub(mapped))
+    let limit: u64 = line["Max address space".len()..].split_whitespace().next()?.parse().ok()?;
+    let used = std::fs::read_to_string("/proc/self/status").ok().and_then(|s| kilobytes_of(&s, "VmSize:"));
+    Some((limit, used.unwrap_or(0)))
+}
+
+/// The value of a `NAME: N kB` line of a `/proc` file, in bytes.
+fn kilobytes_of(text: &str, name: &str) -> Option<u64> {
+    let line = text.lines().find(|l| l.starts_with(name))?;
+    let kb: u64 = line[name.len()..].trim().trim_end_matches("kB").trim().parse().ok()?;
+    kb.checked_mul(1024)
 }
 
 #[cfg(test)]
@@ -79,20 +108,40 @@ mod tests {
     use super::*;
 
     #[test]
-    fn proc_fields_are_read_in_bytes() {
+    fn proc_lines_are_read_in_bytes() {
         let meminfo = "MemTotal:       24000000 kB\nMemAvailable:   22863076 kB\n";
-        assert_eq!(kb_field(meminfo, "MemAvailable:"), Some(22_863_076 * 1024));
-        assert_eq!(kb_field(meminfo, "MemFree:"), None);
+        assert_eq!(kilobytes_of(meminfo, "MemAvailable:"), Some(22_863_076 * 1024));
+        assert_eq!(kilobytes_of(meminfo, "MemFree:"), None);
+        let info = "MemTotal:       24683652 kB\nMemFree:         1745980 kB\nMemAvailable:   22943456 kB\n";
+        assert_eq!(kilobytes_of(info, "MemAvailable:"), Some(22_943_456 * 1024));
+        assert_eq!(kilobytes_of(info, "VmSize:"), None);
+        assert_eq!(kilobytes_of("MemAvailable: lots kB", "MemAvailable:"), None);
+    }
+
+    #[test]
+    fn the_budget_is_a_share_of_what_is_available() {
+        // What this machine reports (it changes from one read to the next while other processes
+        // run, so only its sign is checked here).
+        let (budget, why) = budget();
+        assert!(budget > 0, "{why}");
+        // The rule, on fixed figures.
+        let gib = 1u64 << 30;
+        assert_eq!(budget_of(Some(20 * gib), None), (15 * gib, "three quarters of the 20.0 GiB available".into()));
+        assert_eq!(budget_of(None, None).0, ASSUMED_AVAILABLE / 4 * 3);
+        assert!(budget_of(None, None).1.ends_with("assumed available"));
+        assert_eq!(
+            budget_of(Some(20 * gib), Some((4 * gib, gib))),
+            (3 * gib, "what the address-space limit of 4.0 GiB (ulimit -v) leaves".into())
+        );
+        assert_eq!(budget_of(Some(20 * gib), Some((64 * gib, gib))).0, 15 * gib, "a loose limit changes nothing");
     }
 
     #[test]
     fn a_grid_past_any_machine_is_refused_by_its_numbers() {
         // 65,536² tiles on 2 threads: about 206 GB touched, 481 GB reserved.
-        if available_memory().is_some() {
-            let e = check(65_536, 2).expect_err("no machine running these tests has 206 GB free");
-            let text = e.to_string();
-            assert!(text.contains("65536 × 65536 tiles on 2 thread(s)") && text.contains("lower --tiles"), "{text}");
-        }
+        let e = check(65_536, 2).expect_err("no machine running these tests has 206 GB free");
+        let text = e.to_string();
+        assert!(text.contains("65536 × 65536 tiles on 2 thread(s)") && text.contains("lower --tiles"), "{text}");
         check(16, 2).expect("a small grid fits");
     }
 }

@@ -65,11 +65,8 @@ pub enum ImportError {
     InstancesTooManyTriangles { path: PathBuf, triangles: u64, earlier: u64, max: u64 },
     /// Checked before the triangles are made: a file whose nodes instance more triangles than
     /// this process can hold while importing them ([`IMPORT_BYTES_PER_TRIANGLE`] each).
-    #[error(
-        "{path}: its nodes instance {triangles} triangles, which need {need} of memory to import, but {available} is \
-         available"
-    )]
-    NotEnoughMemory { path: PathBuf, triangles: u64, need: String, available: String },
+    #[error("{path}: its nodes instance {triangles} triangles, which need {need} of memory to import, but {allowed}")]
+    NotEnoughMemory { path: PathBuf, triangles: u64, need: String, allowed: String },
 }
 
 /// The most bytes of memory the import holds for one triangle, until [`SceneBuilder::finish`]

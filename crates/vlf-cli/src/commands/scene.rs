@@ -11,7 +11,6 @@ use std::path::Path;
 use std::time::Instant;
 use vlf_bake::Progress;
 use vlf_bake::atomic::write_atomically;
-use vlf_bake::params::human_bytes;
 use vlf_render::{SceneBounds, SceneOptions};
 use vlf_runtime::{Hit, Ray};
 use vlf_scene::{Affine, Scene, SceneFile};
@@ -74,17 +73,10 @@ fn check_flattened(scene: &Scene, path: &Path, smooth: bool) -> Result<()> {
         bail!("{what}, more than the {} a picture can number (u32 triangle ids)", u32::MAX);
     }
     let per = if smooth { FLAT_BYTES_PER_TRIANGLE.1 } else { FLAT_BYTES_PER_TRIANGLE.0 };
-    let need = triangles.saturating_mul(per);
-    if let Some(available) = vlf_bake::memory::available()
-        && need > available
-    {
-        bail!(
-            "{what}, which the renderer copies to world space in {} of memory, but {} is available",
-            human_bytes(need),
-            human_bytes(available)
-        );
-    }
-    Ok(())
+    crate::limits::check_memory(
+        triangles.saturating_mul(per),
+        &format!("{what}; copying them to world space for the renderer"),
+    )
 }
 
 /// The transform of a moved instance at animation time `s` (0 at the first frame, 1 at the

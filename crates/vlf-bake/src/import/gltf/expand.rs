@@ -56,7 +56,7 @@ fn primitive_triangles(primitive: &gl::Primitive, buffers: &[Vec<u8>]) -> u64 {
 
 /// Counts the triangles the nodes of the glTF file at `path` `visits` (indices into `nodes`) instance, and refuses them if,
 /// with the triangles `builder` holds, they pass the format's limit, or if importing them needs
-/// more memory than [`memory::available`]; else reserves room for them in `builder`.
+/// more memory than [`memory::budget`] allows; else reserves room for them in `builder`.
 pub(super) fn check(
     builder: &mut SceneBuilder,
     path: &Path,
@@ -81,17 +81,15 @@ pub(super) fn check(
         return Err(ImportError::InstancesTooManyTriangles { path, triangles, earlier, max: MAX_TRIANGLES });
     }
     let need = triangles.saturating_mul(IMPORT_BYTES_PER_TRIANGLE);
-    let available = memory::available();
-    let refuse = |available: String| ImportError::NotEnoughMemory {
+    let (budget, why) = memory::budget();
+    let refuse = |allowed: String| ImportError::NotEnoughMemory {
         path: path.clone(),
         triangles,
         need: human_bytes(need),
-        available,
+        allowed,
     };
-    if let Some(available) = available
-        && need > available
-    {
-        return Err(refuse(human_bytes(available)));
+    if need > budget {
+        return Err(refuse(format!("{} may be used ({why})", human_bytes(budget))));
     }
-    builder.try_reserve(triangles as usize).map_err(|_| refuse("not that much".to_string()))
+    builder.try_reserve(triangles as usize).map_err(|_| refuse("they cannot be allocated".to_string()))
 }
