@@ -11,7 +11,7 @@
 use rayon::prelude::*;
 use vlf_bake::{DepthPolicy, Scene, generate};
 use vlf_geom::{BruteForce, Hit, Ray};
-use vlf_runtime::Field;
+use vlf_runtime::{Field, TooManyHits};
 use vlf_tests::{bake, grazes, oracle_triangle, ray_families, stored_triangles};
 
 /// The maxima every ray is also asked with (besides none).
@@ -245,4 +245,36 @@ fn invalid_rays_and_a_zero_maximum_have_no_hits() {
     assert_eq!(later.iter().map(|h| h.t).collect::<Vec<_>>(), [6.0]);
     let batch = field.view().all_hits_batch(&[], 3);
     assert_eq!((batch.offsets.as_slice(), batch.len()), (&[0u64][..], 0));
+}
+
+#[test]
+fn a_batch_stops_at_its_limit_on_hits_and_returns_the_same_lists_within_it() {
+    // Rays from above a box, most through two of its faces, some past it: the batch's total is
+    // known only by tracing it, and the limit must stop it there on one core and on all.
+    let tris = generate::closed_box([-1.0; 3], [1.0; 3]);
+    let scene = Scene::from_triangles("box", &tris).unwrap();
+    let (_dir, field) = bake(&scene, 9, 4, depth(4, 8));
+    let mut rng = generate::Rng::new(8);
+    let rays: Vec<Ray> = (0..5_000)
+        .map(|_| {
+            let o = [rng.range(-1.2, 1.2) as f32, rng.range(-1.2, 1.2) as f32, 5.0];
+            Ray::new(o, [rng.range(-0.3, 0.3) as f32, rng.range(-0.3, 0.3) as f32, -1.0])
+        })
+        .collect();
+    let view = field.view();
+    let all = view.all_hits_batch(&rays, usize::MAX);
+    let total = all.hits.len();
+    assert!(total > 3_000, "most rays should hit the box: {total} hits");
+    assert_eq!(view.all_hits_batch_within(&rays, usize::MAX, total), Ok(all.clone()));
+    assert_eq!(view.par_all_hits_batch_within(&rays, usize::MAX, total), Ok(all.clone()));
+    let fewer = TooManyHits { limit: total - 1 };
+    assert_eq!(view.all_hits_batch_within(&rays, usize::MAX, total - 1), Err(fewer));
+    assert_eq!(view.par_all_hits_batch_within(&rays, usize::MAX, total - 1), Err(fewer));
+    assert_eq!(
+        view.par_all_hits_batch_within(&rays, usize::MAX, 0).unwrap_err().to_string(),
+        "the rays have more than 0 hits in all"
+    );
+    // With a maximum per ray, the limit counts what is returned.
+    let firsts = view.all_hits_batch(&rays, 1);
+    assert_eq!(view.par_all_hits_batch_within(&rays, 1, firsts.hits.len()), Ok(firsts));
 }

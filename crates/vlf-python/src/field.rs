@@ -113,6 +113,12 @@ fn provenance_dict<'py>(py: Python<'py>, p: &Provenance<'_>) -> PyResult<Bound<'
 /// (32).
 const BYTES_PER_RAY: usize = 80;
 
+/// The bytes an all-hits query plans per hit while it makes its results: at most 48 are held at
+/// once (a hit in its thread's list, which grows by doubling, so up to three copies' room while
+/// it moves; then in the stitched list and in the columns made of it, 16 + 32), and a quarter
+/// more is left for everything else.
+const BYTES_PER_HIT: u64 = 64;
+
 /// A `MemoryError` if the arrays of a query on `n` rays cannot be allocated: checked before the
 /// work, so that a huge (say, broadcast) batch is refused instead of aborting the interpreter
 /// when an allocation fails midway.
@@ -342,11 +348,26 @@ impl Field {
     ) -> PyResult<Bound<'py, PyTuple>> {
         let args = RayArgs::extract(origins, directions, tmin, tmax)?;
         let max = max_hits.unwrap_or(usize::MAX);
-        let (splits, columns) = self.run(py, &args, threads, |field, rays, parallel| {
+        // Every ray may hit every triangle: the batch stops once its hits would not fit in memory.
+        let (budget, why) = vlf_bake::memory::budget();
+        let limit = usize::try_from(budget / BYTES_PER_HIT).unwrap_or(usize::MAX);
+        let found = self.run(py, &args, threads, |field, rays, parallel| {
             let view = field.view();
-            let lists = if parallel { view.par_all_hits_batch(rays, max) } else { view.all_hits_batch(rays, max) };
+            let lists = if parallel {
+                view.par_all_hits_batch_within(rays, max, limit)
+            } else {
+                view.all_hits_batch_within(rays, max, limit)
+            }?;
             let splits: Vec<i64> = lists.offsets.iter().map(|&o| o as i64).collect();
-            (splits, Columns::new(field, &lists.hits, parallel))
+            Ok((splits, Columns::new(field, &lists.hits, parallel)))
+        })?;
+        let (splits, columns) = found.map_err(|e: vlf_runtime::TooManyHits| {
+            PyMemoryError::new_err(format!(
+                "all_hits on {} rays: {e}, and their results take about {BYTES_PER_HIT} bytes a hit: more than the \
+                 {} that may be used ({why}); pass max_hits, or trace fewer rays at a time",
+                args.len(),
+                vlf_bake::params::human_bytes(budget)
+            ))
         })?;
         let mut items = vec![PyArray1::from_vec(py, splits).into_any()];
         items.extend(columns.into_py(py)?.iter());

@@ -332,3 +332,43 @@ def test_bytes_paths_are_paths(tmp_path):
     field = vlf.bake_arrays(v, f, out, **SMALL)
     assert field.path == os.fsdecode(out)
     assert vlf.Field.open(out).triangle_count == field.triangle_count
+
+
+@pytest.mark.skipif(not os.path.isfile("/proc/self/status"), reason="reads the address space used from /proc")
+def test_all_hits_beyond_memory_is_a_memory_error_not_an_abort(tmp_path):
+    # A stack of 500 parallel squares (1,000 triangles): every ray down through it hits one
+    # triangle of each, so 20,000 rays hold 10 million hits (about 400 MB of results). Under an
+    # address-space limit that leaves about 200 MB, the batch must stop with a MemoryError, not
+    # abort the interpreter.
+    layers = 500
+    z = np.repeat(np.linspace(0.0, 1.0, layers), 4)
+    xy = np.tile([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]], (layers, 1))
+    v = np.column_stack([xy, z])
+    quads = np.arange(4 * layers).reshape(layers, 4)
+    f = np.concatenate([quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]])
+    path = tmp_path / "stack.vlf"
+    vlf.bake_arrays(v, f, path, **SMALL)
+    script = f"""
+import resource, sys
+import numpy as np
+import vlf
+field = vlf.open({str(path)!r})
+rng = np.random.default_rng(1)
+o = np.column_stack([rng.uniform(-0.9, 0.9, (20000, 2)), np.full(20000, 2.0)])
+d = np.tile([0.0, 0.0, -1.0], (20000, 1))
+assert field.all_hits(o[:10], d[:10]).counts.tolist() == [{layers}] * 10
+used = int(next(l for l in open("/proc/self/status") if l.startswith("VmSize:")).split()[1]) * 1024
+resource.setrlimit(resource.RLIMIT_AS, (used + (200 << 20), resource.RLIM_INFINITY))
+try:
+    field.all_hits(o, d)
+except MemoryError as e:
+    print("MemoryError:", e)
+    sys.exit(0)
+sys.exit("no MemoryError")
+"""
+    import subprocess
+    import sys
+
+    run = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, (run.returncode, run.stdout, run.stderr[-2000:])
+    assert "20000 rays" in run.stdout and "ulimit -v" in run.stdout and "max_hits" in run.stdout, run.stdout

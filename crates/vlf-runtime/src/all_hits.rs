@@ -79,6 +79,45 @@ impl HitLists {
     }
 }
 
+/// A batch of all-hits queries found more hits than the limit it was given
+/// ([`FieldView::all_hits_batch_within`]); it stopped there and returned none of them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TooManyHits {
+    /// The limit, in hits.
+    pub limit: usize,
+}
+
+impl std::fmt::Display for TooManyHits {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "the rays have more than {} hits in all", self.limit)
+    }
+}
+
+impl std::error::Error for TooManyHits {}
+
+/// The hits a batch may still find, shared by the threads of a parallel batch.
+struct HitLimit {
+    limit: usize,
+    found: std::sync::atomic::AtomicUsize,
+}
+
+impl HitLimit {
+    fn new(limit: usize) -> HitLimit {
+        HitLimit { limit, found: std::sync::atomic::AtomicUsize::new(0) }
+    }
+
+    /// Counts `n` more hits: `Err` once the batch's count passes the limit.
+    fn take(&self, n: usize) -> Result<(), TooManyHits> {
+        use std::sync::atomic::Ordering::Relaxed;
+        if n == 0 {
+            return Ok(());
+        }
+        // Saturating, so that the count never wraps back under the limit.
+        let (Ok(before) | Err(before)) = self.found.fetch_update(Relaxed, Relaxed, |f| Some(f.saturating_add(n)));
+        if before.saturating_add(n) > self.limit { Err(TooManyHits { limit: self.limit }) } else { Ok(()) }
+    }
+}
+
 /// The order of the lists: `t` (a total order; hits are never NaN), then the triangle id.
 #[inline]
 fn order(a: &Hit, t: f32, prim: u32) -> std::cmp::Ordering {
@@ -170,16 +209,30 @@ impl FieldView<'_> {
 
     /// [`Self::all_hits`] of every ray of a batch on the calling thread, at most `max_hits` each.
     pub fn all_hits_batch(&self, rays: &[Ray], max_hits: usize) -> HitLists {
-        let view = self;
+        let unlimited = HitLimit::new(usize::MAX);
+        self.batch_within(rays, max_hits, &unlimited).expect("a batch holds fewer than usize::MAX hits")
+    }
+
+    /// [`Self::all_hits_batch`], stopped as soon as the batch has found more than `limit` hits in
+    /// all: the bound a caller sets when it must not run out of memory, where every ray may hit
+    /// every triangle (a batch of `n` rays can hold `n` times the field's triangles).
+    pub fn all_hits_batch_within(&self, rays: &[Ray], max_hits: usize, limit: usize) -> Result<HitLists, TooManyHits> {
+        self.batch_within(rays, max_hits, &HitLimit::new(limit))
+    }
+
+    /// The batch on the calling thread, the hits found counted against `limit` (which the
+    /// parallel batch's parts share).
+    fn batch_within(&self, rays: &[Ray], max_hits: usize, limit: &HitLimit) -> Result<HitLists, TooManyHits> {
         let mut out = HitLists { offsets: Vec::with_capacity(rays.len() + 1), hits: Vec::new() };
         out.offsets.push(0);
         let mut scratch = Vec::new();
         for ray in rays {
-            view.all_hits_into(ray, max_hits, &mut scratch);
+            self.all_hits_into(ray, max_hits, &mut scratch);
+            limit.take(scratch.len())?;
             out.hits.extend_from_slice(&scratch);
             out.offsets.push(out.hits.len() as u64);
         }
-        out
+        Ok(out)
     }
 
     /// Hit counts of a batch on the calling thread: `out[i]` is [`Self::hit_count`] of `rays[i]`.
@@ -198,15 +251,34 @@ impl FieldView<'_> {
     /// the call). The same lists, in the same order.
     #[cfg(feature = "rayon")]
     pub fn par_all_hits_batch(&self, rays: &[Ray], max_hits: usize) -> HitLists {
+        self.par_batch_within(rays, max_hits, &HitLimit::new(usize::MAX))
+            .expect("a batch holds fewer than usize::MAX hits")
+    }
+
+    /// [`Self::all_hits_batch_within`] on all cores: every thread stops once the batch's hits in
+    /// all pass `limit`. The same lists, in the same order, when they do not.
+    #[cfg(feature = "rayon")]
+    pub fn par_all_hits_batch_within(
+        &self,
+        rays: &[Ray],
+        max_hits: usize,
+        limit: usize,
+    ) -> Result<HitLists, TooManyHits> {
+        self.par_batch_within(rays, max_hits, &HitLimit::new(limit))
+    }
+
+    #[cfg(feature = "rayon")]
+    fn par_batch_within(&self, rays: &[Ray], max_hits: usize, limit: &HitLimit) -> Result<HitLists, TooManyHits> {
         use rayon::prelude::*;
-        let parts: Vec<HitLists> = rays.par_chunks(CHUNK).map(|chunk| self.all_hits_batch(chunk, max_hits)).collect();
+        let parts: Vec<HitLists> =
+            rays.par_chunks(CHUNK).map(|chunk| self.batch_within(chunk, max_hits, limit)).collect::<Result<_, _>>()?;
         let total = parts.iter().map(|p| p.hits.len()).sum();
         let mut out = HitLists { offsets: Vec::with_capacity(rays.len() + 1), hits: Vec::with_capacity(total) };
         out.offsets.push(0);
         for part in parts {
             out.extend(part);
         }
-        out
+        Ok(out)
     }
 
     /// [`Self::hit_counts`] on all cores. The same counts, in the same order.

@@ -80,7 +80,7 @@ use std::path::Path;
 use vlf_format::pack::Unpacked;
 use vlf_format::{AlignedBytes, NO_INDEX};
 
-pub use all_hits::HitLists;
+pub use all_hits::{HitLists, TooManyHits};
 pub use batch::Interleave;
 pub use open_error::OpenError;
 use open_error::regular_file;

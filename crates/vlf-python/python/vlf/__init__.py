@@ -310,7 +310,9 @@ class Field:
         """Every hit of each ray on ``[tmin, tmax]``, in order of ``t`` (then triangle id), each
         triangle once even where it lies in several of the field's cells, at most ``max_hits``
         per ray (the closest ones; ``None`` for all). The search of a ray stops once its
-        ``max_hits`` closest hits are known. Arguments as :meth:`closest_hits`."""
+        ``max_hits`` closest hits are known. Arguments as :meth:`closest_hits`. Raises
+        ``MemoryError`` if the batch's hits would not fit in memory (about 64 bytes a hit, against
+        three quarters of the memory available): pass ``max_hits`` or trace fewer rays at once."""
         o, d, lo, hi = _rays(origins, directions, tmin, tmax)
         if max_hits is not None:
             max_hits = int(max_hits)
