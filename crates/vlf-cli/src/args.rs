@@ -51,6 +51,26 @@ pub enum Command {
     Demo(DemoArgs),
 }
 
+impl Command {
+    /// Whether `--json` was given: a failure is then also reported on standard output, as one
+    /// JSON object (`main`).
+    pub fn json(&self) -> bool {
+        match self {
+            Command::Bake(a) => a.json,
+            Command::Merge(a) => a.json,
+            Command::Cache(a) => a.json,
+            Command::Dump(a) => a.json,
+            Command::Pack(a) => a.json,
+            Command::Unpack(a) => a.json,
+            Command::Trace(a) => a.json,
+            Command::Rays(a) => a.json,
+            Command::Render(a) => a.json,
+            Command::Gen(a) => a.json,
+            Command::Demo(_) => false,
+        }
+    }
+}
+
 #[derive(Args)]
 pub struct DemoArgs {
     /// The meshes to bake, repeatable (default: the bunny in the repository's fixtures, in the

@@ -7,7 +7,9 @@
 //! command line was invalid (a value out of range included); 130, 143 and 129 interrupted by
 //! SIGINT, SIGTERM and SIGHUP, after removing every temporary file ([`stop`]). A write past the
 //! file size limit (`ulimit -f`) is an ordinary failure, exit 1, not death by SIGXFSZ. A closed
-//! output pipe (`vlf-bake dump f | head`) counts as success.
+//! output pipe (`vlf-bake dump f | head`) counts as success. With `--json`, a failure (exit 1)
+//! also prints one JSON object on standard output, `{"error": "<the line of standard error>"}`,
+//! so that a tool reading the output always reads JSON.
 
 #![forbid(unsafe_code)]
 
@@ -32,6 +34,7 @@ fn main() -> ExitCode {
         return ExitCode::FAILURE;
     }
     let cli = Cli::parse();
+    let json = cli.command.json();
     let result = run(cli);
     // A signal or a failed worker is being handled: that thread ends the process.
     stop::wait_if_stopping();
@@ -46,6 +49,10 @@ fn main() -> ExitCode {
             }
             None => {
                 eprintln!("error: {e:#}");
+                if json {
+                    // Best effort: the failure is already on standard error and in the exit code.
+                    let _ = commands::stdout_line(&serde_json::json!({ "error": format!("{e:#}") }).to_string());
+                }
                 ExitCode::FAILURE
             }
         },

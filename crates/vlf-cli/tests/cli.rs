@@ -357,7 +357,12 @@ fn a_flipped_byte_in_the_header_is_a_content_hash_mismatch_at_open() {
         let line = r.one_error_line();
         assert!(line.contains("content hash mismatch"), "{line}");
         assert!(line.contains("bad.vlf"), "the error does not name the file: {line}");
-        assert_eq!(r.stdout, "");
+        if args.contains(&"--json") {
+            // With --json the failure is also one JSON object on standard output.
+            assert_eq!(r.json(), serde_json::json!({ "error": &line["error: ".len()..] }));
+        } else {
+            assert_eq!(r.stdout, "");
+        }
     }
 }
 

@@ -426,3 +426,33 @@ fn an_output_that_cannot_be_written_fails_before_the_work_and_writes_nothing() {
         assert_eq!(names_in(d), before, "`{}` wrote a file", r.what);
     }
 }
+
+#[test]
+fn a_failure_with_json_prints_its_error_as_one_json_object() {
+    let dir = tempdir();
+    let field = box_field(dir.path(), "box", [-1.0; 3], [1.0; 3]);
+    // A byte flipped in the middle of the file: opening checks the header, --verify the hashes.
+    let bad = dir.path().join("bad.vlf");
+    let mut bytes = std::fs::read(&field).unwrap();
+    let mid = bytes.len() / 2;
+    bytes[mid] ^= 0x40;
+    std::fs::write(&bad, &bytes).unwrap();
+    let missing = dir.path().join("missing.rays");
+    let out = dir.path().join("hits.bin");
+    for args in [
+        vec!["dump", s(&bad), "--verify", "--json"],
+        vec!["dump", "no-such-field.vlf", "--json"],
+        vec!["trace", s(&field), "--rays", s(&missing), "-o", s(&out), "--json"],
+        vec!["cache", "list", "--cache-dir", s(&field), "--json"],
+    ] {
+        let r = vlf(&args);
+        let line = r.one_error_line().to_owned();
+        let j = r.json();
+        assert_eq!(j, serde_json::json!({ "error": &line["error: ".len()..] }), "`{}`", r.what);
+    }
+    // Without --json, standard output stays empty; a bad command line is not JSON either.
+    let r = vlf(&["dump", s(&bad), "--verify", "-q"]);
+    r.fails_saying(&["failed verification"]);
+    assert_eq!(r.stdout, "");
+    bad_usage(vlf(&["dump", s(&field), "--json", "--no-such-flag"]), "unexpected argument '--no-such-flag' found");
+}
