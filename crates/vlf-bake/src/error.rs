@@ -34,4 +34,11 @@ pub enum BakeError {
         "baking {tiles} × {tiles} tiles on {threads} thread(s) needs about {need} of memory (a direction's buffers take about {per_tile} bytes a tile on each thread), but {allowed}; lower --tiles or --threads"
     )]
     NotEnoughMemory { tiles: u32, threads: usize, per_tile: u64, need: String, allowed: String },
+    /// The field would not fit the free space of the file system it goes to (checked before the
+    /// directions are baked).
+    #[error(
+        "the field {needs} but the file system of {} has {free} free; free some space, write it elsewhere, or lower --directions, --tiles or --max-bytes",
+        dir.display()
+    )]
+    NotEnoughDisk { needs: String, dir: PathBuf, free: String },
 }

@@ -22,6 +22,7 @@
 pub mod atomic;
 pub mod cache;
 pub mod direction;
+pub mod disk;
 pub mod error;
 pub mod estimate;
 pub mod generate;
@@ -60,5 +61,6 @@ pub fn bake_scene(
 ) -> Result<BakeSummary, BakeError> {
     let prep = Prepared::new(scene);
     let choice = choose(&prep, config)?;
+    disk::check(output, disk::Need::of(&choice, prep.triangle_count() as u64, None))?;
     writer::write_field(&prep, &choice, &config.request(), output, progress)
 }

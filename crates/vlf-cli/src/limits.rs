@@ -6,6 +6,7 @@
 use anyhow::{Result, bail};
 use std::path::Path;
 use vlf_bake::atomic::parent_dir;
+use vlf_bake::disk::free_space;
 use vlf_bake::params::human_bytes;
 
 /// Refuses an output of `needed` bytes (at most, if `at_most`) at `path` that the file system of
@@ -73,20 +74,6 @@ pub fn check_memory(needed: u64, what: &str) -> Result<()> {
         bail!("{what} needs {} of memory, but {} may be used ({why})", human_bytes(needed), human_bytes(budget));
     }
     Ok(())
-}
-
-/// The free space of the file system holding `dir`, for an unprivileged writer.
-fn free_space(dir: &Path) -> Option<u64> {
-    #[cfg(unix)]
-    {
-        let s = rustix::fs::statvfs(dir).ok()?;
-        Some(s.f_bavail.saturating_mul(s.f_frsize))
-    }
-    #[cfg(not(unix))]
-    {
-        let _ = dir;
-        None
-    }
 }
 
 /// The soft file size limit (`ulimit -f`), if there is one.
