@@ -232,6 +232,34 @@ fn failing_to_start_a_thread_is_an_error_not_a_hang() {
     }
 }
 
+#[test]
+fn trace_beyond_memory_or_the_disk_is_refused_before_reading_the_rays() {
+    let dir = tempdir();
+    let field = bunny(dir.path());
+    let hits = dir.path().join("hits.bin");
+    // A sparse rays file of 2³⁵ rays (1 TiB, no disk used): 2 TiB of memory to trace.
+    let huge = dir.path().join("huge.rays");
+    std::fs::File::create(&huge).unwrap().set_len(1 << 40).unwrap();
+    let r = vlf(&["trace", s(&field), "--rays", s(&huge), "-o", s(&hits)]);
+    let expected = format!(
+        "error: tracing the 34359738368 rays of {} (64 bytes a ray) needs 2.0 TiB of memory, but ",
+        huge.display()
+    );
+    assert!(r.one_error_line().starts_with(&expected), "{}", r.stderr);
+    // The hits file past a file size limit (ulimit -f, 512-byte blocks): 640×480 rays, 4.7 MiB of hits.
+    let rays = dir.path().join("rays.bin");
+    vlf(&["rays", s(&field), "-q", "-o", s(&rays)]).ok();
+    let r = vlf_with_ulimit("-f 5000", &["trace", s(&field), "--rays", s(&rays), "-o", s(&hits)]);
+    assert_eq!(
+        r.one_error_line(),
+        format!(
+            "error: the hits file {} of 307200 rays needs 4.7 MiB but this process may not write files over 2.4 MiB (ulimit -f)",
+            hits.display()
+        )
+    );
+    assert_eq!(names_in(dir.path()), ["bunny.vlf", "huge.rays", "rays.bin"], "left files behind");
+}
+
 // ---------------------------------------------------------------------------------------------
 // The limits table of docs/reliability.md
 

@@ -3,6 +3,7 @@
 use super::stdout_line;
 use crate::args::TraceArgs;
 use crate::distinct::check_outputs;
+use crate::limits::{check_disk, check_memory};
 use crate::values::BadUsage;
 use anyhow::{Context, Result, bail};
 use std::io::Write;
@@ -24,6 +25,34 @@ fn read_rays(path: &Path) -> Result<Vec<Ray>> {
             bytes.len()
         ),
     }
+}
+
+/// Bytes of a rays file's record (`formats/rays.md`) and of a hits file's.
+const RAY_BYTES: u64 = 32;
+const HIT_BYTES: u64 = 16;
+
+/// The most bytes of memory `trace` holds per ray: the file's records and the rays parsed from
+/// them while it is read (32 each), then the rays, their hits (16) and instance ids (4).
+const MEMORY_PER_RAY: u64 = 2 * RAY_BYTES;
+
+/// Refuses, before anything is read or traced, a rays file whose rays this machine cannot hold
+/// in memory, and outputs the file system has no room for: their sizes follow from the rays
+/// file's. (A rays file that cannot be read is left for `read_rays` to report.)
+fn check_room(a: &TraceArgs) -> Result<()> {
+    let Ok(meta) = std::fs::metadata(&a.rays) else { return Ok(()) };
+    if !meta.is_file() {
+        return Ok(());
+    }
+    let n = meta.len() / RAY_BYTES;
+    check_memory(
+        n.saturating_mul(MEMORY_PER_RAY),
+        &format!("tracing the {n} rays of {} ({MEMORY_PER_RAY} bytes a ray)", a.rays.display()),
+    )?;
+    check_disk(&a.output, n * HIT_BYTES, false, &format!("the hits file {} of {n} rays", a.output.display()))?;
+    if let Some(ids) = &a.instance_ids {
+        check_disk(ids, n * 4, false, &format!("the instance ids file {} of {n} rays", ids.display()))?;
+    }
+    Ok(())
 }
 
 /// The hits of `rays` in `field`, and the seconds spent tracing.
@@ -54,6 +83,7 @@ pub fn run(a: &TraceArgs) -> Result<()> {
         &[source.as_slice(), &[("--rays", a.rays.as_path())]].concat(),
         &[[("-o/--output", a.output.as_path())].as_slice(), ids.as_slice()].concat(),
     )?;
+    check_room(a)?;
     let rays;
     let (hits, seconds) = match (&a.field, &a.scene) {
         (_, Some(scene)) => {
