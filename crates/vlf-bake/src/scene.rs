@@ -44,9 +44,10 @@ pub enum ImportError {
     #[error("{path}: {source_name}, triangle {triangle}: vertex {vertex} has a non-finite coordinate {value:?}")]
     NonFinite { path: PathBuf, source_name: String, triangle: u64, vertex: usize, value: [f32; 3] },
     #[error(
-        "{path}: {source_name}, triangle {triangle}: vertex {vertex} coordinate {value:?} exceeds ±{max:e}, too large for f32 ray tracing"
+        "{path}: {source_name}, triangle {triangle}: vertex {vertex} coordinate {} exceeds ±{max:e}, too large for f32 ray tracing",
+        show_point(value)
     )]
-    TooLarge { path: PathBuf, source_name: String, triangle: u64, vertex: usize, value: [f32; 3], max: f64 },
+    TooLarge { path: PathBuf, source_name: String, triangle: u64, vertex: usize, value: [f64; 3], max: f64 },
     #[error("{path}: {location}: index {index} is out of range (the mesh has {count} vertices)")]
     IndexOutOfRange { path: PathBuf, location: String, index: u64, count: u64 },
     #[error("{path}: {location} requires the unsupported extension {extension}")]
@@ -67,6 +68,13 @@ pub enum ImportError {
     /// this process can hold while importing them ([`IMPORT_BYTES_PER_TRIANGLE`] each).
     #[error("{path}: its nodes instance {triangles} triangles, which need {need} of memory to import, but {allowed}")]
     NotEnoughMemory { path: PathBuf, triangles: u64, need: String, allowed: String },
+}
+
+/// A point as the file most likely wrote it: each coordinate as f32 (glTF and most OBJ files hold
+/// f32), or in full where f32 cannot hold it (`1e308` is shown as such, not as `inf`).
+fn show_point(p: &[f64; 3]) -> String {
+    let show = |c: f64| if (c as f32).is_finite() { format!("{:?}", c as f32) } else { format!("{c:e}") };
+    format!("[{}, {}, {}]", show(p[0]), show(p[1]), show(p[2]))
 }
 
 /// The most bytes of memory the import holds for one triangle, until [`SceneBuilder::finish`]
@@ -319,7 +327,7 @@ impl SceneBuilder {
                     source_name: self.source_name(source),
                     triangle: index,
                     vertex: k,
-                    value: p.map(|c| c as f32),
+                    value: *p,
                     max: MAX_COORDINATE,
                 });
             }

@@ -455,6 +455,13 @@ fn obj_nan_vertex() {
 fn obj_huge_vertex() {
     let e = import_err("bad/huge_vertex.obj");
     assert!(matches!(&e, ImportError::TooLarge { source_name, .. } if source_name.contains("far_away")), "{e:?}");
+    assert!(e.to_string().contains("vertex 2 coordinate [0.0, 1e30, 0.0] exceeds ±1e18"), "{e}");
+    // A coordinate beyond f32 is shown as written, not as `inf`.
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("farther.obj");
+    std::fs::write(&path, "v 0 0 0\nv 1 0 0\nv -1e308 0.5 0\nf 1 2 3\n").unwrap();
+    let e = import_paths(&[path]).unwrap_err().to_string();
+    assert!(e.contains("vertex 2 coordinate [-1e308, 0.5, 0.0] exceeds ±1e18"), "{e}");
 }
 
 #[test]
