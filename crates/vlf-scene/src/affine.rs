@@ -34,6 +34,20 @@ pub enum AffineError {
         /// The product of `A`'s column lengths, what the determinant is compared to.
         scale: f64,
     },
+    /// The linear part scales space by more (or less) than double precision can follow: a
+    /// column's length, their product or the determinant overflows, or the product underflows to
+    /// zero from lengths that are not zero.
+    #[error(
+        "its scale is out of range: column {column} of its 3×3 part is {length:e} long and its determinant is {determinant:e}, beyond what double precision can follow; scale the mesh itself instead"
+    )]
+    OutOfRange {
+        /// The longest column (the shortest, if the product underflows).
+        column: usize,
+        /// That column's length.
+        length: f64,
+        /// `det A` as computed.
+        determinant: f64,
+    },
 }
 
 /// The smallest `|det A| / (|a₁| |a₂| |a₃|)` (the volume of the image of a unit cube relative to
@@ -104,9 +118,28 @@ impl Affine {
         }
         let a = Affine { m };
         let determinant = a.determinant();
-        let column = |c: usize| (0..3).map(|r| m[r][c] * m[r][c]).sum::<f64>().sqrt();
-        let scale = column(0) * column(1) * column(2);
-        if !(determinant.abs() > MIN_CONDITION * scale) || !determinant.is_finite() || !scale.is_finite() {
+        // Each column's length, scaled by its largest entry so that it overflows only past f64.
+        let length = |c: usize| {
+            let big = (0..3).map(|r| m[r][c].abs()).fold(0.0, f64::max);
+            if big == 0.0 { 0.0 } else { big * (0..3).map(|r| (m[r][c] / big).powi(2)).sum::<f64>().sqrt() }
+        };
+        let lengths = [length(0), length(1), length(2)];
+        let scale = lengths[0] * lengths[1] * lengths[2];
+        // Out of range, not singular: a length, their product or the determinant overflows, or
+        // the product of lengths that are not zero underflows to zero.
+        let longest = (0..3).fold(0, |best, c| if lengths[c] > lengths[best] { c } else { best });
+        let shortest = (0..3).fold(0, |best, c| if lengths[c] < lengths[best] { c } else { best });
+        let out_of_range = if !lengths[longest].is_finite() || !scale.is_finite() || !determinant.is_finite() {
+            Some(longest)
+        } else if scale == 0.0 && lengths[shortest] > 0.0 {
+            Some(shortest)
+        } else {
+            None
+        };
+        if let Some(column) = out_of_range {
+            return Err(AffineError::OutOfRange { column, length: lengths[column], determinant });
+        }
+        if !(determinant.abs() > MIN_CONDITION * scale) {
             return Err(AffineError::Singular { determinant, scale });
         }
         Ok(a)
@@ -249,6 +282,23 @@ mod tests {
         assert!(matches!(Affine::from_rows(&m), Err(AffineError::Singular { .. })));
         let msg = Affine::from_rows(&[0.0; 16]).unwrap_err().to_string();
         assert!(msg.contains("last row"), "{msg}");
+        // Scales double precision cannot follow are out of range, not singular: a column whose
+        // length overflows, one that underflows to zero, a determinant that overflows.
+        let scaled =
+            |x: f64, y: f64, z: f64| [x, 0.0, 0.0, 0.0, 0.0, y, 0.0, 0.0, 0.0, 0.0, z, 0.0, 0.0, 0.0, 0.0, 1.0];
+        let e = Affine::from_rows(&scaled(1e300, 1e300, 1e300)).unwrap_err();
+        assert_eq!(e, AffineError::OutOfRange { column: 0, length: 1e300, determinant: f64::INFINITY });
+        assert!(e.to_string().starts_with("its scale is out of range: column 0 of its 3×3 part is 1e300 long"), "{e}");
+        let e = Affine::from_rows(&scaled(1.0, 1e-170, 1e-170)).unwrap_err();
+        assert_eq!(e, AffineError::OutOfRange { column: 1, length: 1e-170, determinant: 0.0 });
+        assert!(Affine::from_rows(&scaled(1.0, 1e-150, 1.0)).is_ok(), "small, yet invertible");
+        assert!(Affine::from_rows(&scaled(1.0, 1.0, 1e200)).is_ok());
+        assert!(matches!(Affine::from_rows(&scaled(1e200, 1e200, 1.0)), Err(AffineError::OutOfRange { .. })));
+        assert!(Affine::from_rows(&scaled(f64::MAX, 1.0, 1.0)).is_ok(), "f64::MAX itself is a length");
+        let mut m = scaled(1.0, 1.0, 1.0);
+        m[4] = f64::MAX;
+        m[8] = f64::MAX;
+        assert!(matches!(Affine::from_rows(&m), Err(AffineError::OutOfRange { column: 0, .. })), "a column past f64");
     }
 
     #[test]
