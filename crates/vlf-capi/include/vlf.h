@@ -252,6 +252,26 @@ typedef struct VlfProvenance {
 } VlfProvenance;
 
 /**
+ * One mesh of `vlf_scene_insert_meshes`: `triangle_count` triangles at `vertices`, 9 doubles
+ * each as in `vlf_scene_insert_triangles`, placed by `transform` (16 doubles as in
+ * `vlf_scene_add_instance`; NULL for the identity).
+ */
+typedef struct VlfMesh {
+  /**
+   * `9 · triangle_count` doubles (may be NULL when `triangle_count` is 0).
+   */
+  const double *vertices;
+  /**
+   * The number of triangles.
+   */
+  size_t triangle_count;
+  /**
+   * 16 doubles, a row-major 4×4 affine matrix; NULL for the identity.
+   */
+  const double *transform;
+} VlfMesh;
+
+/**
  * The parameters a field was baked with (`formats/vlf.md` §5.2), as asked for and as chosen.
  */
 typedef struct VlfParameters {
@@ -895,7 +915,7 @@ VlfStatus vlf_scene_add_field(struct VlfScene *scene, const char *path, uint32_t
  * `O(log n)` for `n` instances, nothing proportional to the field's triangles.
  *
  * Returns `VLF_OK`; `VLF_ERR_INVALID_ARGUMENT` for a field id the scene lacks or a transform that
- * is not finite, not affine or singular (the message says which); `VLF_ERR_NULL_ARGUMENT`.
+ * is not finite, not affine, singular or out of range (the message says which); `VLF_ERR_NULL_ARGUMENT`.
  *
  * # Safety
  * `scene` must be NULL or a live handle used by no other call; `transform` NULL or 16 doubles;
@@ -1001,6 +1021,29 @@ VlfStatus vlf_scene_insert_triangles(struct VlfScene *scene,
                                      size_t n,
                                      const double *transform,
                                      uint32_t *first);
+
+/**
+ * Inserts `n` meshes into field `field`, in memory, each placed by its own transform: what
+ * `vlf_scene_insert_triangles` does once per mesh, with the field's tiles rebuilt once for all
+ * of them instead of once per call (a thousand small meshes inserted one call at a time rebuild
+ * the tiles they share a thousand times). `firsts[i]` receives the id of mesh `i`'s first
+ * triangle (its others follow in order, and each mesh's ids follow the previous mesh's).
+ *
+ * Returns `VLF_OK`; `VLF_ERR_INVALID_ARGUMENT` for a field the scene lacks, or for a mesh with an
+ * unusable transform, a vertex that is not finite or a triangle outside the field's bounding
+ * sphere (the message names the mesh and the triangle; nothing is inserted); `VLF_ERR_LIMIT`
+ * past 2³² − 1 triangles; `VLF_ERR_NULL_ARGUMENT`.
+ *
+ * # Safety
+ * `scene` must be NULL or a live handle used by no other call; `meshes` must point to `n`
+ * meshes, each with `vertices` pointing to `9 · triangle_count` doubles and `transform` NULL or
+ * pointing to 16 doubles; `firsts` NULL or room for `n` ids.
+ */
+VlfStatus vlf_scene_insert_meshes(struct VlfScene *scene,
+                                  uint32_t field,
+                                  const struct VlfMesh *meshes,
+                                  size_t n,
+                                  uint32_t *firsts);
 
 /**
  * Traces `ray` through the instances whose mask shares a bit with `mask`: writes its closest

@@ -152,7 +152,7 @@ pub unsafe extern "C" fn vlf_scene_add_field(scene: *mut VlfScene, path: *const 
 /// `O(log n)` for `n` instances, nothing proportional to the field's triangles.
 ///
 /// Returns `VLF_OK`; `VLF_ERR_INVALID_ARGUMENT` for a field id the scene lacks or a transform that
-/// is not finite, not affine or singular (the message says which); `VLF_ERR_NULL_ARGUMENT`.
+/// is not finite, not affine, singular or out of range (the message says which); `VLF_ERR_NULL_ARGUMENT`.
 ///
 /// # Safety
 /// `scene` must be NULL or a live handle used by no other call; `transform` NULL or 16 doubles;
@@ -331,10 +331,92 @@ pub unsafe extern "C" fn vlf_scene_insert_triangles(
             )
         };
         let id = field_id(scene, field)?;
-        let tris: Vec<[[f64; 3]; 3]> =
-            v.chunks_exact(9).map(|c| std::array::from_fn(|k| [c[3 * k], c[3 * k + 1], c[3 * k + 2]])).collect();
-        let ids = scene.edit(id, |f| f.insert(&tris, &t)).expect("checked field")?;
+        let ids = scene.edit(id, |f| f.insert(&triangles_of(v), &t)).expect("checked field")?;
         first.write(ids.start);
+        Ok(())
+    })
+}
+
+/// Triangles from 9 doubles each (`v0.x, v0.y, v0.z, v1.x, …, v2.z`).
+fn triangles_of(v: &[f64]) -> Vec<[[f64; 3]; 3]> {
+    v.chunks_exact(9).map(|c| std::array::from_fn(|k| [c[3 * k], c[3 * k + 1], c[3 * k + 2]])).collect()
+}
+
+/// One mesh of `vlf_scene_insert_meshes`: `triangle_count` triangles at `vertices`, 9 doubles
+/// each as in `vlf_scene_insert_triangles`, placed by `transform` (16 doubles as in
+/// `vlf_scene_add_instance`; NULL for the identity).
+#[repr(C)]
+pub struct VlfMesh {
+    /// `9 · triangle_count` doubles (may be NULL when `triangle_count` is 0).
+    pub vertices: *const f64,
+    /// The number of triangles.
+    pub triangle_count: usize,
+    /// 16 doubles, a row-major 4×4 affine matrix; NULL for the identity.
+    pub transform: *const f64,
+}
+
+/// Inserts `n` meshes into field `field`, in memory, each placed by its own transform: what
+/// `vlf_scene_insert_triangles` does once per mesh, with the field's tiles rebuilt once for all
+/// of them instead of once per call (a thousand small meshes inserted one call at a time rebuild
+/// the tiles they share a thousand times). `firsts[i]` receives the id of mesh `i`'s first
+/// triangle (its others follow in order, and each mesh's ids follow the previous mesh's).
+///
+/// Returns `VLF_OK`; `VLF_ERR_INVALID_ARGUMENT` for a field the scene lacks, or for a mesh with an
+/// unusable transform, a vertex that is not finite or a triangle outside the field's bounding
+/// sphere (the message names the mesh and the triangle; nothing is inserted); `VLF_ERR_LIMIT`
+/// past 2³² − 1 triangles; `VLF_ERR_NULL_ARGUMENT`.
+///
+/// # Safety
+/// `scene` must be NULL or a live handle used by no other call; `meshes` must point to `n`
+/// meshes, each with `vertices` pointing to `9 · triangle_count` doubles and `transform` NULL or
+/// pointing to 16 doubles; `firsts` NULL or room for `n` ids.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn vlf_scene_insert_meshes(
+    scene: *mut VlfScene,
+    field: u32,
+    meshes: *const VlfMesh,
+    n: usize,
+    firsts: *mut u32,
+) -> VlfStatus {
+    call("vlf_scene_insert_meshes", || {
+        check_array(meshes, n, "meshes")?;
+        if !firsts.is_null() {
+            check_array(firsts, n, "firsts")?;
+            check_disjoint(span(meshes, n), span(firsts, n), "arrays `meshes` and `firsts`")?;
+        }
+        // SAFETY: the caller's promises on `scene` and `meshes`.
+        let (scene, meshes) = unsafe { (scene_mut(scene)?, slice_arg(meshes, n, "meshes")?) };
+        let id = field_id(scene, field)?;
+        let mut parts = Vec::with_capacity(n);
+        for (i, mesh) in meshes.iter().enumerate() {
+            let count = mesh
+                .triangle_count
+                .checked_mul(9)
+                .ok_or_else(|| Failure::invalid(format!("mesh {i}: count {} is too large", mesh.triangle_count)))?;
+            // SAFETY: the caller's promises on each mesh's arrays.
+            let (v, t) = unsafe {
+                (
+                    slice_arg(mesh.vertices, count, &format!("meshes[{i}].vertices"))?,
+                    transform_arg(mesh.transform, &format!("meshes[{i}].transform"))?,
+                )
+            };
+            parts.push((triangles_of(v), t));
+        }
+        let borrowed: Vec<(&[[[f64; 3]; 3]], &Affine)> = parts.iter().map(|(v, t)| (v.as_slice(), t)).collect();
+        let ranges = scene.edit(id, |f| f.insert_all(&borrowed)).expect("checked field").map_err(|(i, e)| {
+            let whole = matches!(e, EditError::TooManyTriangles | EditError::TooLarge);
+            let mut failure = Failure::from(e);
+            if !whole {
+                failure.message = format!("mesh {i}: {}", failure.message);
+            }
+            failure
+        })?;
+        if !firsts.is_null() {
+            // SAFETY: room for `n` ids by the caller's promise (checked non-null and aligned);
+            // written only now that the insert succeeded.
+            let firsts = unsafe { slice_out(firsts, n, "firsts")? };
+            write_all(firsts, &ranges.iter().map(|r| r.start).collect::<Vec<u32>>());
+        }
         Ok(())
     })
 }

@@ -145,6 +145,28 @@ int main(int argc, char **argv) {
     const double far[9] = {c[0] + 10 * r, c[1], c[2], c[0] + 11 * r, c[1], c[2], c[0] + 10 * r, c[1] + r, c[2]};
     CHECK(vlf_scene_insert_triangles(scene, id, far, 1, NULL, &first) == VLF_ERR_INVALID_ARGUMENT);
     CHECK(message_has("bounding sphere") && first == count + 1);
+    /* Several meshes in one call, each with its own transform: zero-area triangles (kept, never
+     * hit), so the traces below do not change. A failing mesh inserts nothing of any mesh. */
+    const double flat[27] = {
+        c[0], c[1], c[2], c[0] + 0.5 * r, c[1], c[2], c[0] + 0.25 * r, c[1], c[2],
+        c[0], c[1], c[2], c[0], c[1] + 0.5 * r, c[2], c[0], c[1] + 0.25 * r, c[2],
+        c[0], c[1], c[2], c[0], c[1], c[2] + 0.5 * r, c[0], c[1], c[2] + 0.25 * r,
+    };
+    const VlfMesh meshes[2] = {{flat, 2, NULL}, {flat + 18, 1, lift}};
+    uint32_t firsts[2] = {0, 0};
+    CHECK(vlf_scene_insert_meshes(scene, id, meshes, 2, firsts) == VLF_OK);
+    CHECK(firsts[0] == count + 2 && firsts[1] == count + 4);
+    const VlfMesh with_far[2] = {{flat, 2, NULL}, {far, 1, NULL}};
+    CHECK(vlf_scene_insert_meshes(scene, id, with_far, 2, firsts) == VLF_ERR_INVALID_ARGUMENT);
+    CHECK(message_has("mesh 1: ") && message_has("bounding sphere") && firsts[0] == count + 2);
+    const VlfMesh with_singular[1] = {{flat, 1, singular}};
+    CHECK(vlf_scene_insert_meshes(scene, id, with_singular, 1, firsts) == VLF_ERR_INVALID_ARGUMENT);
+    CHECK(message_has("meshes[0].transform") && message_has("singular"));
+    const VlfMesh without_vertices[1] = {{NULL, 1, NULL}};
+    CHECK(vlf_scene_insert_meshes(scene, id, without_vertices, 1, NULL) == VLF_ERR_NULL_ARGUMENT);
+    CHECK(vlf_scene_insert_meshes(scene, 7, meshes, 2, NULL) == VLF_ERR_INVALID_ARGUMENT && message_has("no field 7"));
+    CHECK(vlf_scene_insert_meshes(scene, id, NULL, 0, NULL) == VLF_OK);
+    CHECK(vlf_scene_insert_meshes(scene, id, meshes + 1, 1, firsts) == VLF_OK && firsts[0] == count + 5);
 
     trace(scene, rays, n, 1, argv[4]);
 
