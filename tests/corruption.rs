@@ -243,6 +243,17 @@ fn a_directory_or_a_pipe_is_refused_at_open_by_what_it_is() {
             let err = rx.recv_timeout(std::time::Duration::from_secs(20)).expect("opening a pipe hangs");
             let err = err.expect("a pipe opened");
             assert!(err.contains("not a regular file") && err.contains("pipe.vlf"), "{err}");
+            assert!(err.contains("cannot be mapped: read its bytes into memory"), "{err}");
+            // Reading into memory takes regular files only too: a pipe would be waited on.
+            let (tx, rx) = std::sync::mpsc::channel();
+            let path = fifo.clone();
+            std::thread::spawn(move || tx.send(Field::read(&path).err().map(|e| e.to_string())));
+            let err = rx.recv_timeout(std::time::Duration::from_secs(20)).expect("reading a pipe hangs");
+            let err = err.expect("a pipe was read");
+            assert!(err.contains("it is a pipe (FIFO), not a regular file"), "{err}");
         }
+        // `/dev/zero` was read until memory ran out.
+        let err = Field::read("/dev/zero").err().expect("/dev/zero read as a field").to_string();
+        assert_eq!(err, "cannot read field /dev/zero: it is a character device, not a regular file");
     }
 }

@@ -159,8 +159,9 @@ impl ShardFile {
         let path_buf = path.to_path_buf();
         let io_err = |error| ShardError::Io { path: path_buf.clone(), error };
         let corrupt = |problem: String| ShardError::Corrupt { path: path.to_path_buf(), problem };
-        let file = File::open(path).map_err(io_err)?;
-        let len = file.metadata().map_err(io_err)?.len();
+        // Only a regular file: opening a pipe waits for a writer, forever if none comes.
+        let (file, meta) = vlf_runtime::regular::open_regular_file(path).map_err(io_err)?;
+        let len = meta.len();
         let mut head = vec![0u8; HEADER_SIZE.min(len as usize)];
         read_exact_at(&file, &mut head, 0).map_err(io_err)?;
         if head.len() >= 8 && head[..8] == MAGIC {

@@ -440,7 +440,7 @@ fn run_bounded(dir: &Path, args: &[&str]) -> Run {
 }
 
 /// Every input a command reads (meshes, OBJ material libraries, external glTF buffers, rays
-/// files, scene files and the meshes they insert) must be a regular file: a directory, a pipe or
+/// files, scene files and the meshes they insert, fields, shards) must be a regular file: a directory, a pipe or
 /// a device is refused at once, in one line naming the path and what it is. Before, `/dev/zero`
 /// was read until memory ran out and a pipe was waited on forever.
 #[cfg(unix)]
@@ -488,6 +488,13 @@ fn inputs_that_are_not_regular_files_are_refused_by_what_they_are() {
             [&["trace", "--scene", "s.json", "--rays", "r.bin"][..], &hits].concat(),
             vec!["s.json", "instance 0", "insert", "/dev/zero: ", dev],
         ),
+        (
+            [&["trace", "--scene", "pipe.obj", "--rays", "r.bin"][..], &hits].concat(),
+            vec!["scene file pipe.obj: ", fifo],
+        ),
+        (vec!["merge", "pipe.obj", "-o", "o.vlf"], vec!["cannot read pipe.obj: ", fifo]),
+        (vec!["dump", "pipe.obj"], vec!["cannot read field pipe.obj: ", fifo, "cannot be mapped"]),
+        (vec!["dump", "/dev/zero"], vec!["cannot read field /dev/zero: ", dev]),
     ];
     for (args, phrases) in cases {
         let args = [&args[..], &["--directions", "3", "--tiles", "2"][..]].concat();

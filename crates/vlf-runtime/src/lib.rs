@@ -67,6 +67,7 @@ mod filter;
 mod open_error;
 mod prefetch;
 mod query;
+pub mod regular;
 mod scene;
 mod setup;
 #[cfg(test)]
@@ -74,7 +75,6 @@ mod test_rng;
 mod trace;
 mod walk;
 
-use std::fs::File;
 use std::io::Read;
 use std::path::Path;
 use vlf_format::pack::Unpacked;
@@ -83,7 +83,7 @@ use vlf_format::{AlignedBytes, NO_INDEX};
 pub use all_hits::{HitLists, TooManyHits};
 pub use batch::Interleave;
 pub use open_error::OpenError;
-use open_error::regular_file;
+use open_error::mappable;
 
 /// Rays per work item of the parallel batch queries.
 #[cfg(feature = "rayon")]
@@ -235,10 +235,7 @@ impl OpenOptions {
         let io = |error| OpenError::Io { path: path.to_owned(), error };
         // Only a regular file can be mapped. Checked before opening too: opening a pipe waits for
         // a writer, forever if none comes.
-        regular_file(&std::fs::metadata(path).map_err(io)?).map_err(io)?;
-        let file = File::open(path).map_err(io)?;
-        let meta = file.metadata().map_err(io)?;
-        regular_file(&meta).map_err(io)?;
+        let (file, meta) = regular::open_regular_file(path).map_err(mappable).map_err(io)?;
         let len = meta.len();
         if len < vlf_format::HEADER_SIZE as u64 {
             // Too short to map usefully; let the reader name the problem.
@@ -275,7 +272,9 @@ impl OpenOptions {
     /// As [`OpenOptions::open`].
     pub fn read(&self, path: impl AsRef<Path>) -> Result<Field, OpenError> {
         let path = path.as_ref();
-        let bytes = std::fs::read(path).map_err(|error| OpenError::Io { path: path.to_owned(), error })?;
+        // Only a regular file: `/dev/zero` would be read until memory ran out, a pipe waited on.
+        let bytes = regular::read_regular_file(path, u64::MAX)
+            .map_err(|error| OpenError::Io { path: path.to_owned(), error })?;
         self.from_bytes(&bytes).map_err(|e| e.with_path(path))
     }
 

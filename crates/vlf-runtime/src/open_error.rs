@@ -45,18 +45,15 @@ impl OpenError {
     }
 }
 
-/// `Ok` if `meta` is a regular file's, the only kind a field can be mapped from; else why not.
-pub(crate) fn regular_file(meta: &std::fs::Metadata) -> std::io::Result<()> {
-    if meta.is_file() {
-        return Ok(());
+/// The error of opening a field at a path that is not a regular file, with what to do instead:
+/// a pipe's or a device's bytes cannot be mapped, but can be read into memory and opened from
+/// there. Other errors pass unchanged.
+pub(crate) fn mappable(e: std::io::Error) -> std::io::Error {
+    match crate::regular::NotARegularFile::of(&e) {
+        Some(not) if not.what != "a directory" => std::io::Error::new(
+            e.kind(),
+            format!("{e}, which cannot be mapped: read its bytes into memory and open them with from_bytes"),
+        ),
+        _ => e,
     }
-    let (kind, what) = if meta.is_dir() {
-        (std::io::ErrorKind::IsADirectory, "it is a directory")
-    } else {
-        (
-            std::io::ErrorKind::InvalidInput,
-            "it is not a regular file (a pipe, socket or device cannot be mapped: read it into memory instead)",
-        )
-    };
-    Err(std::io::Error::new(kind, what))
 }

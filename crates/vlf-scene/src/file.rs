@@ -178,7 +178,12 @@ impl SceneFile {
         if bytes > MAX_FILE_BYTES {
             return Err(SceneFileError::TooLarge { path: path.into(), bytes });
         }
-        let text = std::fs::read_to_string(path).map_err(io)?;
+        // Only a regular file (a pipe would be waited on, `/dev/zero` read without end), and no
+        // more than the limit, should it grow meanwhile.
+        let raw = vlf_runtime::regular::read_regular_file(path, MAX_FILE_BYTES).map_err(io)?;
+        let text = String::from_utf8(raw).map_err(|e| {
+            io(std::io::Error::new(std::io::ErrorKind::InvalidData, format!("it is not UTF-8 text: {e}")))
+        })?;
         SceneFile::parse(&text, path)
     }
 

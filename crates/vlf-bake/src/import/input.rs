@@ -1,90 +1,11 @@
-//! Reading input files (meshes, OBJ material libraries, external glTF buffers, and the command
-//! line's rays and scene files): only regular files, and never more bytes than asked for.
-//!
-//! A path that is not a regular file is refused by what it is, before it is opened: reading a
-//! device such as `/dev/zero` never ends (it fills memory), opening a pipe waits for a writer,
-//! forever if none comes, and a directory has no bytes.
+//! Reading input files (meshes, OBJ material libraries, external glTF buffers): only regular
+//! files, and never more bytes than asked for, by the rule of [`vlf_runtime::regular`], which
+//! every crate of the pipeline reads its inputs by (re-exported here for the importers' callers).
 
-use std::fs::{File, Metadata};
-use std::io::{self, Read};
+use std::io;
 use std::path::Path;
+
+pub use vlf_runtime::regular::{NotARegularFile, check_regular_file, read_regular_file};
 
 /// How the importers fetch a file a mesh refers to: its path, and the most bytes wanted of it.
 pub(super) type ReadFile<'a> = dyn Fn(&Path, u64) -> io::Result<Vec<u8>> + 'a;
-
-/// Why a path cannot be read as an input: it is not a regular file. Carried inside the
-/// [`io::Error`] that [`read_regular_file`] and [`check_regular_file`] return; its text is "it is
-/// a directory, not a regular file", "it is a pipe (FIFO), not a regular file", and so on.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct NotARegularFile {
-    /// What the path is: "a directory", "a pipe (FIFO)", "a character device", "a block
-    /// device", "a socket", or "something else".
-    pub what: &'static str,
-}
-
-impl std::fmt::Display for NotARegularFile {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "it is {}, not a regular file", self.what)
-    }
-}
-
-impl std::error::Error for NotARegularFile {}
-
-impl NotARegularFile {
-    /// The [`NotARegularFile`] inside `e`, if that is why `e` happened.
-    pub fn of(e: &io::Error) -> Option<&NotARegularFile> {
-        e.get_ref().and_then(|inner| inner.downcast_ref::<NotARegularFile>())
-    }
-}
-
-/// What a file that is not a regular file is, in words.
-fn what_it_is(meta: &Metadata) -> &'static str {
-    let t = meta.file_type();
-    if t.is_dir() {
-        return "a directory";
-    }
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::FileTypeExt;
-        if t.is_fifo() {
-            return "a pipe (FIFO)";
-        }
-        if t.is_char_device() {
-            return "a character device";
-        }
-        if t.is_block_device() {
-            return "a block device";
-        }
-        if t.is_socket() {
-            return "a socket";
-        }
-    }
-    "something else"
-}
-
-/// `Ok` if `meta` (of a path, symbolic links followed) is a regular file's; else an error of kind
-/// [`io::ErrorKind::IsADirectory`] or [`io::ErrorKind::InvalidInput`] holding a
-/// [`NotARegularFile`].
-pub fn check_regular_file(meta: &Metadata) -> io::Result<()> {
-    if meta.is_file() {
-        return Ok(());
-    }
-    let kind = if meta.is_dir() { io::ErrorKind::IsADirectory } else { io::ErrorKind::InvalidInput };
-    Err(io::Error::new(kind, NotARegularFile { what: what_it_is(meta) }))
-}
-
-/// Reads at most `limit` bytes of the regular file at `path`. Anything else is refused before it
-/// is opened (and the opened file is checked again), with a [`NotARegularFile`] error.
-pub fn read_regular_file(path: &Path, limit: u64) -> io::Result<Vec<u8>> {
-    check_regular_file(&std::fs::metadata(path)?)?;
-    let file = File::open(path)?;
-    let meta = file.metadata()?;
-    check_regular_file(&meta)?;
-    let mut bytes = Vec::new();
-    let expected = usize::try_from(meta.len().min(limit)).unwrap_or(usize::MAX);
-    bytes.try_reserve_exact(expected).map_err(|_| {
-        io::Error::new(io::ErrorKind::OutOfMemory, format!("cannot allocate {} bytes to read it", meta.len()))
-    })?;
-    file.take(limit).read_to_end(&mut bytes)?;
-    Ok(bytes)
-}

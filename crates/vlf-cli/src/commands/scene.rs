@@ -17,13 +17,9 @@ use vlf_scene::{Affine, Scene, SceneFile};
 
 /// Reads, checks and loads a scene file: fields opened once each, meshes to insert read with the
 /// bake's importer. The scene file must be a regular file (a device would be read without end, a
-/// pipe waited on); so must the fields (`Field::open`) and meshes (the importer) it names.
+/// pipe waited on); so must the fields (`Field::open`) and meshes (the importer) it names: each
+/// reader refuses anything else (`vlf_runtime::regular`).
 pub fn load(path: &Path) -> Result<Scene> {
-    // (A path that does not exist is left to `SceneFile::read` to report.)
-    if let Ok(meta) = std::fs::metadata(path) {
-        vlf_bake::import::check_regular_file(&meta)
-            .with_context(|| format!("cannot read scene file {}", path.display()))?;
-    }
     let meshes = |p: &Path| vlf_bake::import::import_paths(&[p]).map(|s| s.world_vertices()).map_err(|e| e.to_string());
     Ok(SceneFile::read(path)?.load(&meshes)?)
 }
