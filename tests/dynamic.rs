@@ -625,3 +625,55 @@ fn inserting_many_meshes_at_once_equals_one_at_a_time() {
     assert!(k == 2 && matches!(e, EditError::OutsideSphere { .. }), "{k}: {e}");
     assert_eq!(all.inserted_count(), before);
 }
+
+/// Many instances placed in one call (`add_instances`, what a scene file uses) answer as placing
+/// them one call at a time does, and the hierarchy is built once, where a grid placed row by row
+/// one instance at a time deepens the tree and is rebuilt again and again; an instance of a field
+/// the scene lacks is named by its index and nothing is placed.
+#[test]
+fn placing_many_instances_at_once_equals_one_at_a_time_and_builds_once() {
+    let fs = fields();
+    let (_, r) = fs.fields[0].bounding_sphere();
+    let (_, r1) = fs.fields[1].bounding_sphere();
+    let step = 2.5 * r.max(r1);
+    let mut one = Scene::new();
+    let mut all = Scene::new();
+    let ids: Vec<FieldId> = (0..2).map(|k| one.add_field(fs.fields[k].clone())).collect();
+    for k in 0..2 {
+        all.add_field(fs.fields[k].clone());
+    }
+    // A 40 × 40 grid, row by row, every third instance on a mask of its own.
+    let spots: Vec<(FieldId, Affine, u32)> = (0..1600)
+        .map(|k| {
+            let (i, j) = ((k % 40) as f64, (k / 40) as f64);
+            let mask = if k % 3 == 0 { 0b10 } else { 0b01 };
+            (ids[k % 2], Affine::translation([i * step, j * step, 0.0]), mask)
+        })
+        .collect();
+    for &(f, t, m) in &spots {
+        one.add_instance(f, t, m).unwrap();
+    }
+    assert_eq!(all.add_instances(&spots).unwrap(), 0..1600);
+    assert_eq!(all.rebuilds(), 1, "one build for the whole batch");
+    println!("1,600 instances row by row, one at a time: {} rebuilds; at once: 1", one.rebuilds());
+    let mut rng = Rng::new(77);
+    let rays = rays(&all, &mut rng, 400);
+    for (ray, mask) in &rays {
+        let key = |s: &Scene| s.closest_hit(ray, *mask).map(|f| (f.instance, f.hit.t.to_bits(), f.hit.prim));
+        assert_eq!(key(&all), key(&one), "{ray:?} mask {mask:b}");
+        assert_eq!(all.any_hit(ray, *mask), one.any_hit(ray, *mask), "{ray:?} mask {mask:b}");
+    }
+    let tally = compare(&all, &rays);
+    assert_eq!(tally.mismatches + tally.world_mismatches, 0, "{tally:#?}");
+    // A few more at once go in one by one (no rebuild of the 1,600); a bad field id, third of
+    // four, is named and nothing is placed.
+    let more: Vec<(FieldId, Affine, u32)> =
+        (0..3).map(|k| (ids[1], Affine::translation([k as f64 * step, -step, 0.0]), u32::MAX)).collect();
+    assert_eq!(all.add_instances(&more).unwrap(), 1600..1603);
+    assert_eq!(all.rebuilds(), 1);
+    let bad = [more[0], more[1], (FieldId(7), Affine::IDENTITY, 1), more[2]];
+    let (k, e) = all.add_instances(&bad).unwrap_err();
+    assert!(k == 2 && e.to_string().contains('7'), "{k}: {e}");
+    assert_eq!(all.instance_ids().count(), 1603);
+    assert_eq!(all.add_instances(&[]).unwrap(), 1603..1603);
+}

@@ -252,6 +252,7 @@ impl SceneFile {
         }
         let mut scene = Scene::new();
         let mut shared = HashMap::new();
+        let mut placed = Vec::with_capacity(self.instances.len());
         for (i, spec) in self.instances.iter().enumerate() {
             let base = opened[keys[i].as_path()].clone();
             let id = if spec.remove.is_empty() && spec.insert.is_empty() {
@@ -268,9 +269,10 @@ impl SceneFile {
                     .map_err(|(k, e)| ctx.fail(i, "insert", format!("[{k}] {}: {e}", spec.insert[k].mesh.display())))?;
                 scene.add_field(f)
             };
-            scene.add_instance(id, spec.transform, spec.mask).map_err(|e| ctx.fail(i, "field", e.to_string()))?;
+            placed.push((id, spec.transform, spec.mask));
         }
-        scene.rebuild();
+        // The hierarchy built once over every instance.
+        scene.add_instances(&placed).map_err(|(i, e)| ctx.fail(i, "field", e.to_string()))?;
         Ok(scene)
     }
 }

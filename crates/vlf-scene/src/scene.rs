@@ -172,6 +172,53 @@ impl Scene {
         Ok(id)
     }
 
+    /// [`Scene::add_instance`] of many instances at once, in order: their ids are consecutive
+    /// (returned as a range). When they are many against the instances already placed (a quarter
+    /// of them or more), the hierarchy is built once over all of them, `O(n log n)`, instead of
+    /// taking each in turn: inserted one by one in an order that follows space (a row of
+    /// instances, a grid), each goes beside the last and deepens the tree, which is then rebuilt
+    /// again and again. Either all are added or none.
+    ///
+    /// # Errors
+    /// [`SceneError::NoSuchField`] or [`SceneError::TooManyInstances`], with the index of the
+    /// first instance at fault; nothing is added.
+    pub fn add_instances(
+        &mut self,
+        instances: &[(FieldId, Affine, u32)],
+    ) -> Result<std::ops::Range<InstanceId>, (usize, SceneError)> {
+        let first = self.instances.len();
+        if let Some(k) = instances.iter().position(|(f, _, _)| self.fields.get(f.0 as usize).is_none()) {
+            return Err((k, SceneError::NoSuchField(instances[k].0.0, self.fields.len())));
+        }
+        // Ids stop below u32::MAX (the id of a miss).
+        let room = (u32::MAX as usize).saturating_sub(first);
+        if instances.len() > room {
+            return Err((room, SceneError::TooManyInstances));
+        }
+        if instances.is_empty() {
+            return Ok(first as u32..first as u32);
+        }
+        let whole = instances.len() >= self.live / 4;
+        let mut boxes = Vec::with_capacity(instances.len());
+        for (k, &(field, transform, mask)) in instances.iter().enumerate() {
+            let f = &self.fields[field.0 as usize];
+            boxes.push(((first + k) as u32, world_box(f, &transform)));
+            self.instances.push(Some(Instance::new(field, transform, mask, f.field().origin())));
+        }
+        self.live += instances.len();
+        if whole {
+            let mut items = self.bvh.items();
+            items.extend(boxes);
+            self.bvh.build(&items);
+        } else {
+            for (key, b) in boxes {
+                self.bvh.insert(key, b);
+            }
+            self.bvh.maybe_rebuild();
+        }
+        Ok(first as u32..self.instances.len() as u32)
+    }
+
     fn instance_mut(&mut self, id: InstanceId) -> Result<&mut Instance, SceneError> {
         self.instances.get_mut(id as usize).and_then(Option::as_mut).ok_or(SceneError::NoSuchInstance(id))
     }
