@@ -252,6 +252,26 @@ typedef struct VlfProvenance {
 } VlfProvenance;
 
 /**
+ * One instance of `vlf_scene_add_instances`: the field to place (an id from
+ * `vlf_scene_add_field`), its transform (16 doubles as in `vlf_scene_add_instance`; NULL for the
+ * identity) and its mask.
+ */
+typedef struct VlfInstanceDesc {
+  /**
+   * The field's id in the scene.
+   */
+  uint32_t field;
+  /**
+   * The instance's mask: a query sees it only if their masks share a bit.
+   */
+  uint32_t mask;
+  /**
+   * 16 doubles, a row-major 4×4 affine matrix; NULL for the identity.
+   */
+  const double *transform;
+} VlfInstanceDesc;
+
+/**
  * One mesh of `vlf_scene_insert_meshes`: `triangle_count` triangles at `vertices`, 9 doubles
  * each as in `vlf_scene_insert_triangles`, placed by `transform` (16 doubles as in
  * `vlf_scene_add_instance`; NULL for the identity).
@@ -926,6 +946,26 @@ VlfStatus vlf_scene_add_instance(struct VlfScene *scene,
                                  const double *transform,
                                  uint32_t mask,
                                  uint32_t *instance);
+
+/**
+ * Places `n` instances at once: what `vlf_scene_add_instance` does once per instance, with the
+ * top-level hierarchy built once over all of them when they are a quarter of the scene or more
+ * (instances added one at a time in an order that follows space, a row or a grid, deepen the
+ * tree and have it rebuilt every seventy-odd adds: `docs/dynamic.md`). They get the ids
+ * `*first`, `*first + 1`, …, in order.
+ *
+ * Returns `VLF_OK`; `VLF_ERR_INVALID_ARGUMENT` for an instance of a field the scene lacks or
+ * with an unusable transform (the message names the instance; nothing is placed);
+ * `VLF_ERR_LIMIT` past 2³² − 1 instances; `VLF_ERR_NULL_ARGUMENT`.
+ *
+ * # Safety
+ * `scene` must be NULL or a live handle used by no other call; `instances` must point to `n`
+ * descriptions, each `transform` NULL or pointing to 16 doubles; `first` NULL or writable.
+ */
+VlfStatus vlf_scene_add_instances(struct VlfScene *scene,
+                                  const struct VlfInstanceDesc *instances,
+                                  size_t n,
+                                  uint32_t *first);
 
 /**
  * Moves instance `instance`: `transform` (as in `vlf_scene_add_instance`) replaces its

@@ -175,6 +175,65 @@ pub unsafe extern "C" fn vlf_scene_add_instance(
     })
 }
 
+/// One instance of `vlf_scene_add_instances`: the field to place (an id from
+/// `vlf_scene_add_field`), its transform (16 doubles as in `vlf_scene_add_instance`; NULL for the
+/// identity) and its mask.
+#[repr(C)]
+pub struct VlfInstanceDesc {
+    /// The field's id in the scene.
+    pub field: u32,
+    /// The instance's mask: a query sees it only if their masks share a bit.
+    pub mask: u32,
+    /// 16 doubles, a row-major 4×4 affine matrix; NULL for the identity.
+    pub transform: *const f64,
+}
+
+/// Places `n` instances at once: what `vlf_scene_add_instance` does once per instance, with the
+/// top-level hierarchy built once over all of them when they are a quarter of the scene or more
+/// (instances added one at a time in an order that follows space, a row or a grid, deepen the
+/// tree and have it rebuilt every seventy-odd adds: `docs/dynamic.md`). They get the ids
+/// `*first`, `*first + 1`, …, in order.
+///
+/// Returns `VLF_OK`; `VLF_ERR_INVALID_ARGUMENT` for an instance of a field the scene lacks or
+/// with an unusable transform (the message names the instance; nothing is placed);
+/// `VLF_ERR_LIMIT` past 2³² − 1 instances; `VLF_ERR_NULL_ARGUMENT`.
+///
+/// # Safety
+/// `scene` must be NULL or a live handle used by no other call; `instances` must point to `n`
+/// descriptions, each `transform` NULL or pointing to 16 doubles; `first` NULL or writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn vlf_scene_add_instances(
+    scene: *mut VlfScene,
+    instances: *const VlfInstanceDesc,
+    n: usize,
+    first: *mut u32,
+) -> VlfStatus {
+    call("vlf_scene_add_instances", || {
+        // SAFETY: the caller's promises on `scene`, `instances` and `first`.
+        let (scene, descs, first) =
+            unsafe { (scene_mut(scene)?, slice_arg(instances, n, "instances")?, optional_out(first, "first")?) };
+        let mut placed = Vec::with_capacity(n);
+        for (i, d) in descs.iter().enumerate() {
+            // SAFETY: the caller's promise on each transform.
+            let t = unsafe { transform_arg(d.transform, &format!("instances[{i}].transform")) }?;
+            let id = field_id(scene, d.field).map_err(|mut f| {
+                f.message = format!("instances[{i}]: {}", f.message);
+                f
+            })?;
+            placed.push((id, t, d.mask));
+        }
+        let ids = scene.add_instances(&placed).map_err(|(i, e)| {
+            let mut f = Failure::from(e);
+            f.message = format!("instances[{i}]: {}", f.message);
+            f
+        })?;
+        if let Some(first) = first {
+            first.write(ids.start);
+        }
+        Ok(())
+    })
+}
+
 /// Moves instance `instance`: `transform` (as in `vlf_scene_add_instance`) replaces its
 /// transform. Refits the top-level hierarchy along the instance's path: nothing proportional to
 /// its triangles.

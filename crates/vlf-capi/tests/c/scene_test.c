@@ -115,6 +115,34 @@ int main(int argc, char **argv) {
 
     trace(scene, rays, n, 2, argv[3]);
 
+    /* The same two instances placed in one call answer every ray as the two calls above do. */
+    VlfScene *batch = NULL;
+    uint32_t batch_field = 99, batch_first = 99;
+    CHECK(vlf_scene_create(&batch) == VLF_OK && vlf_scene_add_field(batch, argv[1], &batch_field) == VLF_OK);
+    const VlfInstanceDesc pair[2] = {{batch_field, 1, NULL}, {batch_field, 2, mirror}};
+    CHECK(vlf_scene_add_instances(batch, pair, 2, &batch_first) == VLF_OK && batch_first == 0);
+    for (size_t i = 0; i < n; i++) {
+        VlfHit h1, h2;
+        uint32_t i1, i2;
+        CHECK(vlf_scene_closest_hit(scene, &rays[i], 0xFFFFFFFFu, &h1, &i1) == VLF_OK);
+        CHECK(vlf_scene_closest_hit(batch, &rays[i], 0xFFFFFFFFu, &h2, &i2) == VLF_OK);
+        if (memcmp(&h1, &h2, sizeof h1) != 0 || i1 != i2) {
+            CHECK(!"a batch-placed instance answers as one placed alone");
+            break;
+        }
+    }
+    /* A bad field id or transform, second of three, is named and nothing is placed. */
+    const VlfInstanceDesc no_field[3] = {{batch_field, 1, NULL}, {7, 1, NULL}, {batch_field, 1, NULL}};
+    CHECK(vlf_scene_add_instances(batch, no_field, 3, &batch_first) == VLF_ERR_INVALID_ARGUMENT);
+    CHECK(message_has("instances[1]") && message_has("no field 7") && batch_first == 0);
+    const VlfInstanceDesc squashed[3] = {{batch_field, 1, NULL}, {batch_field, 1, singular}, {batch_field, 1, NULL}};
+    CHECK(vlf_scene_add_instances(batch, squashed, 3, NULL) == VLF_ERR_INVALID_ARGUMENT);
+    CHECK(message_has("instances[1].transform") && message_has("singular"));
+    CHECK(vlf_scene_instance_count(batch, &live) == VLF_OK && live == 2);
+    CHECK(vlf_scene_add_instances(batch, NULL, 1, NULL) == VLF_ERR_NULL_ARGUMENT);
+    CHECK(vlf_scene_add_instances(batch, NULL, 0, &batch_first) == VLF_OK && batch_first == 2);
+    vlf_scene_destroy(batch);
+
     /* Move instance 0 up by r/2, show instance 1 to mask 3, and edit the field: both see it. */
     const double up[16] = {1, 0, 0, 0, 0, 1, 0, 0.5 * r, 0, 0, 1, 0, 0, 0, 0, 1};
     CHECK(vlf_scene_set_transform(scene, a, up) == VLF_OK);
