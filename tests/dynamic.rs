@@ -628,8 +628,8 @@ fn inserting_many_meshes_at_once_equals_one_at_a_time() {
 
 /// Many instances placed in one call (`add_instances`, what a scene file uses) answer as placing
 /// them one call at a time does, and the hierarchy is built once, where a grid placed row by row
-/// one instance at a time deepens the tree and is rebuilt again and again; an instance of a field
-/// the scene lacks is named by its index and nothing is placed.
+/// one instance at a time is rebuilt whenever its inner boxes' area doubles; an instance of a
+/// field the scene lacks is named by its index and nothing is placed.
 #[test]
 fn placing_many_instances_at_once_equals_one_at_a_time_and_builds_once() {
     let fs = fields();
