@@ -190,7 +190,7 @@ pub struct VlfInstanceDesc {
 
 /// Places `n` instances at once: what `vlf_scene_add_instance` does once per instance, with the
 /// top-level hierarchy built once over all of them when they are a quarter of the scene or more
-/// (900,000 instances of a grid load in 4.8 s this way and in 11.9 s one call at a time:
+/// (900,000 instances of a grid load in 5.0 s this way and in 9.4 s one call at a time:
 /// `docs/dynamic.md`). They get the ids `*first`, `*first + 1`, …, in order.
 ///
 /// Returns `VLF_OK`; `VLF_ERR_INVALID_ARGUMENT` for an instance of a field the scene lacks or

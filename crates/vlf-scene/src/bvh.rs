@@ -129,14 +129,31 @@ struct Node {
     /// Inner node: the children. Leaf: `left` is the instance and `right` is [`NONE`].
     left: u32,
     right: u32,
-    /// The leaves below (1 for a leaf) and the height of the subtree (0 for a leaf).
+}
+
+// One cache line a node on the traversal's path.
+const _: () = assert!(size_of::<Node>() == 64);
+
+/// A node's leaf count (1 for a leaf) and the height of its subtree (0 for a leaf), kept beside
+/// the nodes rather than in them: inserts and rebuilds read them, traversal does not, and a
+/// [`Node`] stays 64 bytes (72 with these in it traced primary rays 15–20% slower).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct Shape {
     count: u32,
     height: u32,
 }
 
+impl Shape {
+    const LEAF: Shape = Shape { count: 1, height: 0 };
+
+    fn above(l: Shape, r: Shape) -> Shape {
+        Shape { count: l.count + r.count, height: 1 + l.height.max(r.height) }
+    }
+}
+
 impl Node {
     fn leaf(b: Aabb, parent: u32, key: u32) -> Node {
-        Node { b, parent, left: key, right: NONE, count: 1, height: 0 }
+        Node { b, parent, left: key, right: NONE }
     }
 
     fn is_leaf(&self) -> bool {
@@ -148,6 +165,8 @@ impl Node {
 #[derive(Clone, Debug, Default)]
 pub struct Bvh {
     nodes: Vec<Node>,
+    /// Each node's leaf count and height, by node id.
+    shape: Vec<Shape>,
     root: u32,
     /// Node slots free for reuse.
     free: Vec<u32>,
@@ -174,6 +193,7 @@ impl Bvh {
     /// Rebuilds the tree over `items` (key, box), replacing everything it held. `O(n log n)`.
     pub fn build(&mut self, items: &[(u32, Aabb)]) {
         self.nodes.clear();
+        self.shape.clear();
         self.free.clear();
         self.leaf_of.iter_mut().for_each(|l| *l = NONE);
         self.root = NONE;
@@ -187,6 +207,7 @@ impl Bvh {
         if !items.is_empty() {
             let mut work: Vec<(u32, Aabb)> = items.to_vec();
             self.nodes.reserve(2 * items.len());
+            self.shape.reserve(2 * items.len());
             self.root = self.build_range(&mut work, NONE, 0);
         }
         self.area = self.nodes.iter().filter(|n| !n.is_leaf()).map(|n| n.b.half_area()).sum();
@@ -198,25 +219,25 @@ impl Bvh {
     fn build_range(&mut self, items: &mut [(u32, Aabb)], parent: u32, depth: usize) -> u32 {
         if items.len() == 1 {
             let (key, b) = items[0];
-            let me = self.alloc(Node::leaf(b, parent, key));
+            let me = self.alloc(Node::leaf(b, parent, key), Shape::LEAF);
             self.leaf_of[key as usize] = me;
             return me;
         }
         let b = items.iter().fold(Aabb::EMPTY, |acc, i| acc.union(&i.1));
-        let me = self.alloc(Node { b, parent, left: NONE, right: NONE, count: items.len() as u32, height: 0 });
+        let me = self.alloc(Node { b, parent, left: NONE, right: NONE }, Shape::default());
         let mid = split(items, depth < SAH_DEPTH);
         let (l, r) = items.split_at_mut(mid);
         let left = self.build_range(l, me, depth + 1);
         let right = self.build_range(r, me, depth + 1);
-        let height = 1 + self.nodes[left as usize].height.max(self.nodes[right as usize].height);
+        self.shape[me as usize] = Shape::above(self.shape[left as usize], self.shape[right as usize]);
         let node = &mut self.nodes[me as usize];
-        (node.left, node.right, node.height) = (left, right, height);
+        (node.left, node.right) = (left, right);
         me
     }
 
     /// The height of the tree: the most inner nodes on a path from the root to a leaf.
     pub fn depth(&self) -> usize {
-        if self.root == NONE { 0 } else { self.nodes[self.root as usize].height as usize }
+        if self.root == NONE { 0 } else { self.shape[self.root as usize].height as usize }
     }
 
     /// The leaves' current keys and boxes.
@@ -237,14 +258,16 @@ impl Bvh {
         }
     }
 
-    fn alloc(&mut self, n: Node) -> u32 {
+    fn alloc(&mut self, n: Node, shape: Shape) -> u32 {
         match self.free.pop() {
             Some(i) => {
                 self.nodes[i as usize] = n;
+                self.shape[i as usize] = shape;
                 i
             }
             None => {
                 self.nodes.push(n);
+                self.shape.push(shape);
                 (self.nodes.len() - 1) as u32
             }
         }
@@ -257,7 +280,7 @@ impl Bvh {
         }
         debug_assert_eq!(self.leaf_of[key as usize], NONE, "key {key} is in the tree");
         self.leaves += 1;
-        let leaf = self.alloc(Node::leaf(b, NONE, key));
+        let leaf = self.alloc(Node::leaf(b, NONE, key), Shape::LEAF);
         self.leaf_of[key as usize] = leaf;
         if self.root == NONE {
             self.root = leaf;
@@ -274,7 +297,8 @@ impl Bvh {
         }
         let sibling = at;
         let parent = self.nodes[sibling as usize].parent;
-        let inner = self.alloc(Node { b: Aabb::EMPTY, parent, left: sibling, right: leaf, count: 2, height: 1 });
+        let leaves = Shape::above(Shape::LEAF, Shape::LEAF);
+        let inner = self.alloc(Node { b: Aabb::EMPTY, parent, left: sibling, right: leaf }, leaves);
         self.nodes[sibling as usize].parent = inner;
         self.nodes[leaf as usize].parent = inner;
         if parent == NONE {
@@ -301,8 +325,8 @@ impl Bvh {
         let mut at = self.nodes[leaf as usize].parent;
         while at != NONE {
             let n = self.nodes[at as usize];
-            let heavier = self.nodes[n.left as usize].count.max(self.nodes[n.right as usize].count);
-            if heavier as f64 > UNBALANCED * n.count as f64 {
+            let heavier = self.shape[n.left as usize].count.max(self.shape[n.right as usize].count);
+            if heavier as f64 > UNBALANCED * self.shape[at as usize].count as f64 {
                 scapegoat = at;
             }
             at = n.parent;
@@ -320,7 +344,7 @@ impl Bvh {
     /// its `s` leaves. Its box, and so every box above it, stays as it was.
     fn rebuild_subtree(&mut self, top: u32) {
         let parent = self.nodes[top as usize].parent;
-        let mut items = Vec::with_capacity(self.nodes[top as usize].count as usize);
+        let mut items = Vec::with_capacity(self.shape[top as usize].count as usize);
         let mut pending = vec![top];
         while let Some(at) = pending.pop() {
             let n = self.nodes[at as usize];
@@ -405,11 +429,10 @@ impl Bvh {
         let mut at = from;
         while at != NONE {
             let n = self.nodes[at as usize];
-            let (l, r) = (self.nodes[n.left as usize], self.nodes[n.right as usize]);
-            let b = l.b.union(&r.b);
+            let b = self.nodes[n.left as usize].b.union(&self.nodes[n.right as usize].b);
             self.area += b.half_area() - n.b.half_area();
-            let node = &mut self.nodes[at as usize];
-            (node.b, node.count, node.height) = (b, l.count + r.count, 1 + l.height.max(r.height));
+            self.nodes[at as usize].b = b;
+            self.shape[at as usize] = Shape::above(self.shape[n.left as usize], self.shape[n.right as usize]);
             at = n.parent;
         }
     }
@@ -548,13 +571,14 @@ mod tests {
             if n.is_leaf() {
                 assert_eq!(bvh.leaf_of[n.left as usize], at, "key {}: leaf", n.left);
                 *leaves += 1;
-                assert_eq!((n.count, n.height), (1, 0), "leaf {at}");
+                assert_eq!(bvh.shape[at as usize], Shape::LEAF, "leaf {at}");
                 return (n.b, 1, 0);
             }
             let (lb, lc, lh) = walk(bvh, n.left, at, area, leaves);
             let (rb, rc, rh) = walk(bvh, n.right, at, area, leaves);
             let b = lb.union(&rb);
-            assert_eq!((n.b, n.count, n.height), (b, lc + rc, 1 + lh.max(rh)), "node {at}");
+            let shape = bvh.shape[at as usize];
+            assert_eq!((n.b, shape.count, shape.height), (b, lc + rc, 1 + lh.max(rh)), "node {at}");
             *area += b.half_area();
             (b, lc + rc, 1 + lh.max(rh))
         }

@@ -176,7 +176,7 @@ impl Scene {
     /// (returned as a range). When they are many against the instances already placed (a quarter
     /// of them or more), the hierarchy is built once over all of them, `O(n log n)`, instead of
     /// taking each in turn (each insert `O(depth)`, with the subtree rebuilds and the geometric
-    /// whole-tree rebuilds of the area rule they bring: 900,000 instances of a grid take 2.5
+    /// whole-tree rebuilds of the area rule they bring: 900,000 instances of a grid take 1.9
     /// times as long one at a time, `docs/dynamic.md`). Either all are added or none.
     ///
     /// # Errors
