@@ -3,15 +3,15 @@
 //! and failing after minutes of work (`docs/reliability.md`, the limits table).
 
 use crate::error::BakeError;
-use crate::params::{Choice, human_bytes, lower_bound_bytes};
+use crate::params::{Choice, human_bytes};
 use crate::shard::ShardSpec;
 use std::path::Path;
 use vlf_format::size;
 use vlf_geom::Lattice;
 
 /// What a bake will write, by what it knows before it starts: the estimate of automatic
-/// parameters (sampled on real directions; a shard's share of it), or the size no field of the
-/// parameters can be smaller than.
+/// parameters (sampled on real directions), or, for explicit parameters and for a shard, the size
+/// no field (or shard) of the parameters can be smaller than.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Need {
     /// About this many bytes.
@@ -24,16 +24,13 @@ impl Need {
     /// What a bake of `triangles` triangles with `choice`'s parameters (the directions of `shard`
     /// only, if it is one) will write.
     pub fn of(choice: &Choice, triangles: u64, shard: Option<ShardSpec>) -> Need {
+        if let (Some(bytes), None) = (choice.estimated_bytes, shard) {
+            return Need::Estimated(bytes);
+        }
         let p = &choice.params;
         let all = Lattice::new(p.lattice_n).direction_count();
-        match (choice.estimated_bytes, shard) {
-            (Some(bytes), None) => Need::Estimated(bytes),
-            (_, Some(shard)) => {
-                let mine = shard.directions(all as u32).len() as u64;
-                Need::AtLeast(size::lower_bound(mine, p.tiles as u64 * p.tiles as u64, triangles))
-            }
-            (None, None) => Need::AtLeast(lower_bound_bytes(triangles, p.lattice_n, p.tiles)),
-        }
+        let mine = shard.map_or(all, |s| s.directions(all as u32).len() as u64);
+        Need::AtLeast(size::lower_bound(mine, p.tiles as u64 * p.tiles as u64, triangles))
     }
 
     fn bytes(self) -> u64 {

@@ -1070,8 +1070,8 @@ VlfStatus vlf_scene_insert_triangles(struct VlfScene *scene,
  *
  * Returns `VLF_OK`; `VLF_ERR_INVALID_ARGUMENT` for a field the scene lacks, or for a mesh with an
  * unusable transform, a vertex that is not finite or a triangle outside the field's bounding
- * sphere (the message names the mesh and the triangle; nothing is inserted); `VLF_ERR_LIMIT`
- * past 2³² − 1 triangles; `VLF_ERR_NULL_ARGUMENT`.
+ * sphere (the message names the mesh, `meshes[i]`, and the triangle; nothing is inserted);
+ * `VLF_ERR_LIMIT` past 2³² − 1 triangles; `VLF_ERR_NULL_ARGUMENT`.
  *
  * # Safety
  * `scene` must be NULL or a live handle used by no other call; `meshes` must point to `n`

@@ -22,6 +22,10 @@ impl Failure {
     pub(crate) fn invalid(message: String) -> Failure {
         Failure { status: VLF_ERR_INVALID_ARGUMENT, message }
     }
+    /// The failure with its message prefixed by what it is about (`instances[3]: …`).
+    pub(crate) fn about(self, what: &str) -> Failure {
+        Failure { message: format!("{what}: {}", self.message), ..self }
+    }
 }
 
 impl From<OpenError> for Failure {

@@ -215,17 +215,10 @@ pub unsafe extern "C" fn vlf_scene_add_instances(
         for (i, d) in descs.iter().enumerate() {
             // SAFETY: the caller's promise on each transform.
             let t = unsafe { transform_arg(d.transform, &format!("instances[{i}].transform")) }?;
-            let id = field_id(scene, d.field).map_err(|mut f| {
-                f.message = format!("instances[{i}]: {}", f.message);
-                f
-            })?;
-            placed.push((id, t, d.mask));
+            placed.push((FieldId(d.field), t, d.mask));
         }
-        let ids = scene.add_instances(&placed).map_err(|(i, e)| {
-            let mut f = Failure::from(e);
-            f.message = format!("instances[{i}]: {}", f.message);
-            f
-        })?;
+        // The scene checks the field ids, all before placing any.
+        let ids = scene.add_instances(&placed).map_err(|(i, e)| Failure::from(e).about(&format!("instances[{i}]")))?;
         if let Some(first) = first {
             first.write(ids.start);
         }
@@ -421,8 +414,8 @@ pub struct VlfMesh {
 ///
 /// Returns `VLF_OK`; `VLF_ERR_INVALID_ARGUMENT` for a field the scene lacks, or for a mesh with an
 /// unusable transform, a vertex that is not finite or a triangle outside the field's bounding
-/// sphere (the message names the mesh and the triangle; nothing is inserted); `VLF_ERR_LIMIT`
-/// past 2³² − 1 triangles; `VLF_ERR_NULL_ARGUMENT`.
+/// sphere (the message names the mesh, `meshes[i]`, and the triangle; nothing is inserted);
+/// `VLF_ERR_LIMIT` past 2³² − 1 triangles; `VLF_ERR_NULL_ARGUMENT`.
 ///
 /// # Safety
 /// `scene` must be NULL or a live handle used by no other call; `meshes` must point to `n`
@@ -450,7 +443,7 @@ pub unsafe extern "C" fn vlf_scene_insert_meshes(
             let count = mesh
                 .triangle_count
                 .checked_mul(9)
-                .ok_or_else(|| Failure::invalid(format!("mesh {i}: count {} is too large", mesh.triangle_count)))?;
+                .ok_or_else(|| Failure::invalid(format!("meshes[{i}]: count {} is too large", mesh.triangle_count)))?;
             // SAFETY: the caller's promises on each mesh's arrays.
             let (v, t) = unsafe {
                 (
@@ -461,13 +454,10 @@ pub unsafe extern "C" fn vlf_scene_insert_meshes(
             parts.push((triangles_of(v), t));
         }
         let borrowed: Vec<(&[[[f64; 3]; 3]], &Affine)> = parts.iter().map(|(v, t)| (v.as_slice(), t)).collect();
-        let ranges = scene.edit(id, |f| f.insert_all(&borrowed)).expect("checked field").map_err(|(i, e)| {
-            let whole = matches!(e, EditError::TooManyTriangles | EditError::TooLarge);
-            let mut failure = Failure::from(e);
-            if !whole {
-                failure.message = format!("mesh {i}: {}", failure.message);
-            }
-            failure
+        let ranges = scene.edit(id, |f| f.insert_all(&borrowed)).expect("checked field").map_err(|(i, e)| match e {
+            // Faults of the whole insert, not of one mesh.
+            EditError::TooManyTriangles | EditError::TooLarge => Failure::from(e),
+            _ => Failure::from(e).about(&format!("meshes[{i}]")),
         })?;
         if !firsts.is_null() {
             // SAFETY: room for `n` ids by the caller's promise (checked non-null and aligned);

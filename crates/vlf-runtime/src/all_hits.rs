@@ -95,26 +95,25 @@ impl std::fmt::Display for TooManyHits {
 
 impl std::error::Error for TooManyHits {}
 
-/// The hits a batch may still find, shared by the threads of a parallel batch.
-struct HitLimit {
-    limit: usize,
-    found: std::sync::atomic::AtomicUsize,
-}
+/// The hits a batch may still find, counted across the threads of a parallel batch; `None` for
+/// a batch without a limit, which counts nothing (no shared counter touched per ray).
+struct HitLimit(Option<(usize, std::sync::atomic::AtomicUsize)>);
 
 impl HitLimit {
+    const NONE: HitLimit = HitLimit(None);
+
     fn new(limit: usize) -> HitLimit {
-        HitLimit { limit, found: std::sync::atomic::AtomicUsize::new(0) }
+        HitLimit(Some((limit, std::sync::atomic::AtomicUsize::new(0))))
     }
 
-    /// Counts `n` more hits: `Err` once the batch's count passes the limit.
+    /// Counts `n` more hits: `Err` once the batch's count passes the limit. (Hits are held in
+    /// memory, 16 bytes each, so the count cannot reach `usize::MAX`.)
     fn take(&self, n: usize) -> Result<(), TooManyHits> {
-        use std::sync::atomic::Ordering::Relaxed;
-        if n == 0 {
-            return Ok(());
+        let Some((limit, found)) = &self.0 else { return Ok(()) };
+        if n > 0 && found.fetch_add(n, std::sync::atomic::Ordering::Relaxed) + n > *limit {
+            return Err(TooManyHits { limit: *limit });
         }
-        // Saturating, so that the count never wraps back under the limit.
-        let (Ok(before) | Err(before)) = self.found.fetch_update(Relaxed, Relaxed, |f| Some(f.saturating_add(n)));
-        if before.saturating_add(n) > self.limit { Err(TooManyHits { limit: self.limit }) } else { Ok(()) }
+        Ok(())
     }
 }
 
@@ -209,8 +208,7 @@ impl FieldView<'_> {
 
     /// [`Self::all_hits`] of every ray of a batch on the calling thread, at most `max_hits` each.
     pub fn all_hits_batch(&self, rays: &[Ray], max_hits: usize) -> HitLists {
-        let unlimited = HitLimit::new(usize::MAX);
-        self.batch_within(rays, max_hits, &unlimited).expect("a batch holds fewer than usize::MAX hits")
+        self.batch_within(rays, max_hits, &HitLimit::NONE).expect("a batch without a limit never passes it")
     }
 
     /// [`Self::all_hits_batch`], stopped as soon as the batch has found more than `limit` hits in
@@ -251,8 +249,7 @@ impl FieldView<'_> {
     /// the call). The same lists, in the same order.
     #[cfg(feature = "rayon")]
     pub fn par_all_hits_batch(&self, rays: &[Ray], max_hits: usize) -> HitLists {
-        self.par_batch_within(rays, max_hits, &HitLimit::new(usize::MAX))
-            .expect("a batch holds fewer than usize::MAX hits")
+        self.par_batch_within(rays, max_hits, &HitLimit::NONE).expect("a batch without a limit never passes it")
     }
 
     /// [`Self::all_hits_batch_within`] on all cores: every thread stops once the batch's hits in

@@ -49,11 +49,11 @@ impl OpenError {
 /// a pipe's or a device's bytes cannot be mapped, but can be read into memory and opened from
 /// there. Other errors pass unchanged.
 pub(crate) fn mappable(e: std::io::Error) -> std::io::Error {
-    match crate::regular::NotARegularFile::of(&e) {
-        Some(not) if not.what != "a directory" => std::io::Error::new(
-            e.kind(),
-            format!("{e}, which cannot be mapped: read its bytes into memory and open them with from_bytes"),
-        ),
-        _ => e,
+    if crate::regular::NotARegularFile::of(&e).is_none() || e.kind() == std::io::ErrorKind::IsADirectory {
+        return e;
     }
+    std::io::Error::new(
+        e.kind(),
+        format!("{e}, which cannot be mapped: read its bytes into memory and open them with from_bytes"),
+    )
 }

@@ -161,15 +161,7 @@ impl Scene {
     /// # Errors
     /// [`SceneError::NoSuchField`], [`SceneError::TooManyInstances`].
     pub fn add_instance(&mut self, field: FieldId, transform: Affine, mask: u32) -> Result<InstanceId, SceneError> {
-        let f = self.fields.get(field.0 as usize).ok_or(SceneError::NoSuchField(field.0, self.fields.len()))?;
-        let id =
-            u32::try_from(self.instances.len()).ok().filter(|&i| i < u32::MAX).ok_or(SceneError::TooManyInstances)?;
-        let b = world_box(f, &transform);
-        self.instances.push(Some(Instance::new(field, transform, mask, f.field().origin())));
-        self.live += 1;
-        self.bvh.insert(id, b);
-        self.bvh.maybe_rebuild();
-        Ok(id)
+        self.add_instances(&[(field, transform, mask)]).map(|ids| ids.start).map_err(|(_, e)| e)
     }
 
     /// [`Scene::add_instance`] of many instances at once, in order: their ids are consecutive

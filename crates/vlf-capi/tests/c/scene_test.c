@@ -186,7 +186,7 @@ int main(int argc, char **argv) {
     CHECK(firsts[0] == count + 2 && firsts[1] == count + 4);
     const VlfMesh with_far[2] = {{flat, 2, NULL}, {far, 1, NULL}};
     CHECK(vlf_scene_insert_meshes(scene, id, with_far, 2, firsts) == VLF_ERR_INVALID_ARGUMENT);
-    CHECK(message_has("mesh 1: ") && message_has("bounding sphere") && firsts[0] == count + 2);
+    CHECK(message_has("meshes[1]: ") && message_has("bounding sphere") && firsts[0] == count + 2);
     const VlfMesh with_singular[1] = {{flat, 1, singular}};
     CHECK(vlf_scene_insert_meshes(scene, id, with_singular, 1, firsts) == VLF_ERR_INVALID_ARGUMENT);
     CHECK(message_has("meshes[0].transform") && message_has("singular"));
