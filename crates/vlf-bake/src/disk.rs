@@ -3,15 +3,15 @@
 //! and failing after minutes of work (`docs/reliability.md`, the limits table).
 
 use crate::error::BakeError;
+use crate::floor::EntryFloor;
 use crate::params::{Choice, human_bytes};
-use crate::shard::ShardSpec;
 use std::path::Path;
-use vlf_format::size;
 use vlf_geom::Lattice;
 
 /// What a bake will write, by what it knows before it starts: the estimate of automatic
 /// parameters (sampled on real directions), or, for explicit parameters and for a shard, the size
-/// no field (or shard) of the parameters can be smaller than.
+/// no field (or shard) of the parameters can be smaller than, with the tiles its triangles cover
+/// (`crate::floor`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Need {
     /// About this many bytes.
@@ -21,16 +21,14 @@ pub enum Need {
 }
 
 impl Need {
-    /// What a bake of `triangles` triangles with `choice`'s parameters (the directions of `shard`
-    /// only, if it is one) will write.
-    pub fn of(choice: &Choice, triangles: u64, shard: Option<ShardSpec>) -> Need {
-        if let (Some(bytes), None) = (choice.estimated_bytes, shard) {
-            return Need::Estimated(bytes);
+    /// What a bake of `triangles` triangles with `choice`'s parameters will write, the
+    /// directions `floor` covers (all of them, or a shard's).
+    pub fn of(choice: &Choice, triangles: u64, floor: &EntryFloor) -> Need {
+        let all = Lattice::new(choice.params.lattice_n).direction_count();
+        match choice.estimated_bytes {
+            Some(bytes) if floor.directions.len() as u64 == all => Need::Estimated(bytes),
+            _ => Need::AtLeast(floor.bytes_at_least(choice.params.tiles, triangles)),
         }
-        let p = &choice.params;
-        let all = Lattice::new(p.lattice_n).direction_count();
-        let mine = shard.map_or(all, |s| s.directions(all as u32).len() as u64);
-        Need::AtLeast(size::lower_bound(mine, p.tiles as u64 * p.tiles as u64, triangles))
     }
 
     fn bytes(self) -> u64 {
@@ -40,17 +38,18 @@ impl Need {
     }
 }
 
-/// `Err` if the file system that will hold `output` has less free space than `need` (as an
-/// unprivileged writer sees it). Where the free space cannot be read, nothing is checked.
-pub fn check(output: &Path, need: Need) -> Result<(), BakeError> {
+/// `Err` if the file system that will hold `output` (a field, or a shard: `what`, for the
+/// message) has less free space than `need` (as an unprivileged writer sees it). Where the free
+/// space cannot be read, nothing is checked.
+pub fn check(output: &Path, what: &'static str, need: Need) -> Result<(), BakeError> {
     let dir = crate::atomic::parent_dir(output);
     match free_space(&dir) {
-        Some(free) => check_against(&dir, free, need),
+        Some(free) => check_against(&dir, free, what, need),
         None => Ok(()),
     }
 }
 
-fn check_against(dir: &Path, free: u64, need: Need) -> Result<(), BakeError> {
+fn check_against(dir: &Path, free: u64, what: &'static str, need: Need) -> Result<(), BakeError> {
     if need.bytes() <= free {
         return Ok(());
     }
@@ -58,7 +57,7 @@ fn check_against(dir: &Path, free: u64, need: Need) -> Result<(), BakeError> {
         Need::Estimated(b) => format!("is estimated at {}", human_bytes(b)),
         Need::AtLeast(b) => format!("needs {} or more", human_bytes(b)),
     };
-    Err(BakeError::NotEnoughDisk { needs, dir: dir.to_path_buf(), free: human_bytes(free) })
+    Err(BakeError::NotEnoughDisk { what, needs, dir: dir.to_path_buf(), free: human_bytes(free) })
 }
 
 /// The free space of the file system holding `dir`, for an unprivileged writer; `None` where it
@@ -84,21 +83,24 @@ mod tests {
     fn a_field_larger_than_the_free_space_is_refused_naming_both() {
         let dir = Path::new("/data");
         let gib = 1u64 << 30;
-        assert!(check_against(dir, 10 * gib, Need::Estimated(10 * gib)).is_ok());
-        let e = check_against(dir, 10 * gib, Need::Estimated(10 * gib + 1)).unwrap_err().to_string();
+        assert!(check_against(dir, 10 * gib, "field", Need::Estimated(10 * gib)).is_ok());
+        let e = check_against(dir, 10 * gib, "field", Need::Estimated(10 * gib + 1)).unwrap_err().to_string();
         assert!(
             e.starts_with("the field is estimated at 10.0 GiB but the file system of /data has 10.0 GiB free"),
             "{e}"
         );
-        let e = check_against(dir, gib, Need::AtLeast(128 * gib)).unwrap_err().to_string();
+        let e = check_against(dir, gib, "shard", Need::AtLeast(128 * gib)).unwrap_err().to_string();
         assert!(
-            e.starts_with("the field needs 128.0 GiB or more but the file system of /data has 1.0 GiB free"),
+            e.starts_with("the shard needs 128.0 GiB or more but the file system of /data has 1.0 GiB free"),
             "{e}"
         );
         // This machine's temporary directory has some room, and none for 2⁶³ bytes.
         let tmp = std::env::temp_dir();
         assert!(free_space(&tmp).is_some_and(|f| f > 0));
-        assert!(check(&tmp.join("f.vlf"), Need::AtLeast(1)).is_ok());
-        assert!(matches!(check(&tmp.join("f.vlf"), Need::AtLeast(1 << 63)), Err(BakeError::NotEnoughDisk { .. })));
+        assert!(check(&tmp.join("f.vlf"), "field", Need::AtLeast(1)).is_ok());
+        assert!(matches!(
+            check(&tmp.join("f.vlf"), "field", Need::AtLeast(1 << 63)),
+            Err(BakeError::NotEnoughDisk { .. })
+        ));
     }
 }

@@ -28,17 +28,25 @@ pub enum BakeError {
         "direction {direction} needs {bytes} bytes more for its {tiles} × {tiles} tiles, which cannot be allocated; lower --tiles or --threads"
     )]
     OutOfMemory { direction: usize, bytes: u64, tiles: u32 },
-    /// The bake's buffers for its tile grids would not fit the memory this machine has free
+    /// The bake's buffers for its directions would not fit the memory this machine has free
     /// (checked before any work).
     #[error(
-        "baking {tiles} × {tiles} tiles on {threads} thread(s) needs about {need} of memory (a direction's buffers take about {per_tile} bytes a tile on each thread), but {allowed}; lower --tiles or --threads"
+        "baking {tiles} × {tiles} tiles on {threads} thread(s) needs about {need} of memory (a direction's buffers take about {per_tile} bytes a tile on each thread, and {per_entry} bytes for each of its triangle-tile pairs, {entries} or more in the largest direction), but {allowed}; lower --tiles or --threads"
     )]
-    NotEnoughMemory { tiles: u32, threads: usize, per_tile: u64, need: String, allowed: String },
+    NotEnoughMemory {
+        tiles: u32,
+        threads: usize,
+        per_tile: u64,
+        per_entry: u64,
+        entries: u64,
+        need: String,
+        allowed: String,
+    },
     /// The field would not fit the free space of the file system it goes to (checked before the
     /// directions are baked).
     #[error(
-        "the field {needs} but the file system of {} has {free} free; free some space, write it elsewhere, or lower --directions, --tiles or --max-bytes",
+        "the {what} {needs} but the file system of {} has {free} free; free some space, write it elsewhere, or lower --directions, --tiles or --max-bytes",
         dir.display()
     )]
-    NotEnoughDisk { needs: String, dir: PathBuf, free: String },
+    NotEnoughDisk { what: &'static str, needs: String, dir: PathBuf, free: String },
 }

@@ -4,6 +4,7 @@
 
 use crate::direction::{DirectionData, Scratch, build_direction};
 use crate::error::BakeError;
+use crate::floor::EntryFloor;
 use crate::params::{Measure, Params, Sample};
 use crate::prepare::Prepared;
 use crate::statistics::merge_stats;
@@ -55,5 +56,10 @@ impl Measure for Prepared<'_> {
     fn sample(&self, params: &Params, directions: usize) -> Result<Sample, BakeError> {
         let (bytes_per_direction, statistics) = sample_direction_bytes(self, params, directions)?;
         Ok(Sample { bytes_per_direction, statistics })
+    }
+
+    fn entries_at_least(&self, params: &Params) -> u64 {
+        let directions = Lattice::new(params.lattice_n).direction_count() as u32;
+        EntryFloor::measure(self, &params.grid(self.radius), 0..directions).total
     }
 }

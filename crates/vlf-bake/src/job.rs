@@ -156,7 +156,6 @@ pub fn run_bake_job(job: &BakeJob<'_>, progress: &dyn Progress) -> Result<BakeOu
     if let Some(announce) = job.on_choice {
         announce(&choice);
     }
-    crate::disk::check(output, crate::disk::Need::of(&choice, prep.triangle_count() as u64, job.shard))?;
     let tmp = AtomicFile::create(output).map_err(io_err)?;
     let baked = write_into(&prep, &choice, &request, tmp.file(), output, job.shard, &phases)?;
     let written = tmp.file().try_clone().map_err(io_err)?;

@@ -25,6 +25,7 @@ pub mod direction;
 pub mod disk;
 pub mod error;
 pub mod estimate;
+pub mod floor;
 pub mod generate;
 pub mod import;
 pub mod inspect;
@@ -61,6 +62,5 @@ pub fn bake_scene(
 ) -> Result<BakeSummary, BakeError> {
     let prep = Prepared::new(scene);
     let choice = choose(&prep, config)?;
-    disk::check(output, disk::Need::of(&choice, prep.triangle_count() as u64, None))?;
     writer::write_field(&prep, &choice, &config.request(), output, progress)
 }

@@ -8,7 +8,9 @@
 
 use crate::atomic::AtomicFile;
 use crate::direction::{DirectionData, Scratch, build_direction};
+use crate::disk::Need;
 use crate::error::BakeError;
+use crate::floor::EntryFloor;
 use crate::params::Choice;
 use crate::prepare::Prepared;
 use crate::progress::Progress;
@@ -180,14 +182,18 @@ pub fn write_into(
 ) -> Result<Baked, BakeError> {
     let params = &choice.params;
     let io_err = |error: io::Error| BakeError::Io { path: path.to_path_buf(), error };
-    crate::memory::check(params.tiles, rayon::current_num_threads())?;
-
-    let shared = shared_sections(prep, params, request);
     let direction_count = Lattice::new(params.lattice_n).direction_count() as u32;
     let range = match shard {
         None => 0..direction_count,
         Some(s) => s.directions(direction_count),
     };
+    // The room the bake needs, before any work: memory for its directions, disk for its output.
+    let floor = EntryFloor::measure(prep, &params.grid(prep.radius), range.clone());
+    crate::memory::check(params.tiles, rayon::current_num_threads(), &floor)?;
+    let what = if shard.is_some() { "shard" } else { "field" };
+    crate::disk::check(path, what, Need::of(choice, prep.triangle_count() as u64, &floor))?;
+
+    let shared = shared_sections(prep, params, request);
     let rotations: Vec<[f64; 9]> = Lattice::new(params.lattice_n).directions().iter().map(|&d| frame(d)).collect();
     let n2 = params.tiles as u64 * params.tiles as u64;
     let hash = input_hash(prep.scene, request);

@@ -303,7 +303,8 @@ fn the_limits_table_is_what_the_commands_do() {
         // A message that goes on with this machine's numbers: run only where the machine has less
         // than the row needs (else the command would do the work for real).
         if let Some(prefix) = expected.strip_suffix('…') {
-            let needs = prefix.split(" needs ").nth(1).unwrap().trim_start_matches("up to ");
+            let needs =
+                prefix.split(" needs ").nth(1).unwrap().trim_start_matches("up to ").trim_start_matches("about ");
             let needed = size_of_text(&needs.split(' ').take(2).collect::<Vec<_>>().join(" "));
             let has = if prefix.contains(" of memory") { memory } else { free };
             if needed <= has {

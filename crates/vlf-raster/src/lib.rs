@@ -10,9 +10,11 @@
 
 #![forbid(unsafe_code)]
 
+pub mod coverage;
 pub mod direction;
 pub mod leaves;
 pub mod raster;
 
+pub use coverage::Areas;
 pub use direction::{DirectionData, DirectionError, Entry, Grid, Scratch, TileBlock, TooLarge, build_direction};
 pub use leaves::{DEFAULT_LEAF_SIZE, DEFAULT_MAX_DEPTH, DepthPolicy};

@@ -284,6 +284,10 @@ pub trait Measure {
     fn radius(&self) -> f64;
     /// Measures `directions` sample directions of a field with `params`.
     fn sample(&self, params: &Params, directions: usize) -> Result<Sample, Self::Error>;
+    /// At least how many entries (triangle-tile pairs) all the directions of a field with
+    /// `params` make, from the triangles' areas (`crate::floor`): explicit parameters are held to
+    /// `--max-bytes` with it.
+    fn entries_at_least(&self, params: &Params) -> u64;
 }
 
 /// A lower bound on a field's size (`vlf_format::size::lower_bound`): every tile costs a record
@@ -342,7 +346,15 @@ pub fn choose<M: Measure>(scene: &M, config: &BakeConfig) -> Result<Choice, M::E
     let auto_budget = budget.min(config.max_bytes_per_triangle.saturating_mul(tris).max(automatic_floor(tris)));
     let explicit_n = config.directions.map(|l| Lattice::with_at_least(l as u64).n);
     if let (Some(lattice_n), Some(tiles)) = (explicit_n, config.tiles) {
-        let lb = lower_bound_bytes(tris, lattice_n, tiles);
+        // The bound from the tiles and triangle count first; then, where that fits, the one that
+        // also counts the tiles each triangle covers (cheap, but not free on large meshes).
+        let params = params_for(scene.radius(), lattice_n, tiles, config.depth);
+        let mut lb = lower_bound_bytes(tris, lattice_n, tiles);
+        if lb <= budget {
+            let l = Lattice::new(lattice_n).direction_count();
+            let beyond = scene.entries_at_least(&params).saturating_sub(l.saturating_mul(tris));
+            lb = lb.saturating_add(beyond.saturating_mul(size::REF));
+        }
         if lb > budget {
             return Err(ParamsError::ExplicitOverBudget {
                 directions: Lattice::new(lattice_n).direction_count(),
@@ -353,12 +365,7 @@ pub fn choose<M: Measure>(scene: &M, config: &BakeConfig) -> Result<Choice, M::E
             }
             .into());
         }
-        return Ok(Choice {
-            params: params_for(scene.radius(), lattice_n, tiles, config.depth),
-            automatic: false,
-            estimated_bytes: None,
-            reason: "as requested".into(),
-        });
+        return Ok(Choice { params, automatic: false, estimated_bytes: None, reason: "as requested".into() });
     }
 
     // Rungs consistent with whatever the user fixed, coarse to fine. A ray crosses about

@@ -72,10 +72,19 @@ impl Measure for Model {
         statistics.tile_triangle_sum = (self.load(p.tiles) * n2 as f64) as u64;
         Ok(Sample { bytes_per_direction: self.bytes_per_direction(p.tiles), statistics })
     }
+
+    fn entries_at_least(&self, p: &Params) -> u64 {
+        self.triangles * Lattice::new(p.lattice_n).direction_count()
+    }
 }
 
-/// A scene that must never be measured.
-struct Unmeasured;
+/// A scene that must never be measured by sample directions; its triangles each cover `covered`
+/// tiles in every direction.
+struct Unmeasured {
+    covered: u64,
+}
+
+const UNMEASURED: Unmeasured = Unmeasured { covered: 1 };
 
 impl Measure for Unmeasured {
     type Error = ParamsError;
@@ -88,6 +97,10 @@ impl Measure for Unmeasured {
     fn sample(&self, _: &Params, _: usize) -> Result<Sample, ParamsError> {
         panic!("explicit parameters need no estimate")
     }
+    fn entries_at_least(&self, p: &Params) -> u64 {
+        // Each triangle in `covered` tiles of every direction.
+        self.triangle_count() * self.covered * Lattice::new(p.lattice_n).direction_count()
+    }
 }
 
 fn automatic(max_bytes: u64) -> BakeConfig {
@@ -97,14 +110,14 @@ fn automatic(max_bytes: u64) -> BakeConfig {
 #[test]
 fn explicit_parameters_are_taken_as_requested_without_an_estimate() {
     let config = BakeConfig { directions: Some(33), tiles: Some(16), ..BakeConfig::default() };
-    let choice = choose(&Unmeasured, &config).unwrap();
+    let choice = choose(&UNMEASURED, &config).unwrap();
     let expected = Params { lattice_n: 4, tiles: 16, depth: DepthPolicy::default(), margin: 4.0 * MARGIN_FRACTION };
     assert_eq!(choice.params, expected);
     assert!(!choice.automatic);
     assert_eq!((choice.estimated_bytes, choice.reason.as_str()), (None, "as requested"));
     // Directions round up to the next lattice size 2N² + 1.
     let config = BakeConfig { directions: Some(34), tiles: Some(8), ..BakeConfig::default() };
-    assert_eq!(choose(&Unmeasured, &config).unwrap().params.lattice_n, 5);
+    assert_eq!(choose(&UNMEASURED, &config).unwrap().params.lattice_n, 5);
 }
 
 #[test]
@@ -112,9 +125,9 @@ fn explicit_parameters_whose_lower_bound_exceeds_max_bytes_are_refused() {
     let lb = lower_bound_bytes(1000, 4, 16);
     assert_eq!(lb, 33 * (32 + 4 * 256 + 8 * 1000 + 16 + 72) + 44 * 1000);
     let fits = BakeConfig { directions: Some(33), tiles: Some(16), max_bytes: lb, ..BakeConfig::default() };
-    assert!(choose(&Unmeasured, &fits).is_ok(), "the bound itself fits");
+    assert!(choose(&UNMEASURED, &fits).is_ok(), "the bound itself fits");
     let config = BakeConfig { max_bytes: lb - 1, ..fits };
-    let e = choose(&Unmeasured, &config).unwrap_err();
+    let e = choose(&UNMEASURED, &config).unwrap_err();
     assert_eq!(
         e,
         ParamsError::ExplicitOverBudget { directions: 33, tiles: 16, triangles: 1000, at_least: lb, budget: lb - 1 }
@@ -123,6 +136,14 @@ fn explicit_parameters_whose_lower_bound_exceeds_max_bytes_are_refused() {
         e.to_string(),
         "33 directions × 16² tiles need at least 337.6 KiB for 1000 triangles, over the --max-bytes budget of 337.6 KiB"
     );
+    // Triangles that each cover 50 tiles add 49 refs each in every direction, which the bound from
+    // the tile and triangle counts alone does not see.
+    let covering = Unmeasured { covered: 50 };
+    let at_least = lb + 33 * 1000 * 49 * 8;
+    let e = choose(&covering, &fits).unwrap_err();
+    assert_eq!(e, ParamsError::ExplicitOverBudget { directions: 33, tiles: 16, triangles: 1000, at_least, budget: lb });
+    let config = BakeConfig { max_bytes: at_least, ..fits };
+    assert!(choose(&covering, &config).is_ok(), "the bound with the tiles covered fits");
 }
 
 #[test]
@@ -382,7 +403,7 @@ fn flags_out_of_range_are_refused_before_any_estimate() {
         (BakeConfig { max_bytes_per_triangle: 0, ..d }, ParamsError::Budget, "must be positive"),
     ] {
         assert_eq!(config.validate(), Err(error.clone()));
-        assert_eq!(choose(&Unmeasured, &config).unwrap_err(), error);
+        assert_eq!(choose(&UNMEASURED, &config).unwrap_err(), error);
         assert!(error.to_string().contains(message), "{error}");
     }
     for ok in [BakeConfig { directions: Some(3), tiles: Some(1), ..d }, depth(1, MAX_DEPTH), d] {

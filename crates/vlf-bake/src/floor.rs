@@ -1,0 +1,125 @@
+//! What a bake's directions make at least, known before any of them is baked: their
+//! rasterisations' entries, from the triangles' projected areas ([`vlf_raster::Areas`]). Explicit
+//! parameters are held to `--max-bytes` by it, and every bake's memory and disk checks count it:
+//! on a grid far finer than the triangles, each triangle lands in thousands of tiles, which the
+//! per-tile figures alone do not see.
+
+use crate::prepare::Prepared;
+use rayon::prelude::*;
+use std::ops::Range;
+use vlf_format::size;
+use vlf_geom::Lattice;
+use vlf_geom::frame::frame;
+use vlf_raster::{Areas, Grid};
+
+/// Directions measured at most, spread evenly over the range; the others count one entry per
+/// triangle (still a lower bound).
+const MAX_MEASURED: u64 = 4096;
+
+/// Triangle-direction pairs measured at most (about a tenth of a second on one core).
+const MAX_PAIRS: u64 = 1 << 26;
+
+/// Lower bounds on the entries of a range of a field's directions.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct EntryFloor {
+    /// The directions covered.
+    pub directions: Range<u32>,
+    /// At least this many entries in all of them.
+    pub total: u64,
+    /// At least this many in the direction that makes the most (the largest bound measured).
+    pub largest: u64,
+}
+
+impl EntryFloor {
+    /// One entry per triangle in each direction: the floor where no direction is measured.
+    pub fn per_triangle(triangles: u64, directions: Range<u32>) -> EntryFloor {
+        let count = directions.len() as u64;
+        EntryFloor { directions, total: count.saturating_mul(triangles), largest: triangles }
+    }
+
+    /// At least how many bytes a field (or shard) of these directions on `tiles`² tiles over
+    /// `triangles` triangles takes: [`size::lower_bound`], with these entries' refs in place of
+    /// its one per triangle.
+    pub fn bytes_at_least(&self, tiles: u32, triangles: u64) -> u64 {
+        let count = self.directions.len() as u64;
+        let beyond = self.total.saturating_sub(count.saturating_mul(triangles));
+        size::lower_bound(count, tiles as u64 * tiles as u64, triangles)
+            .saturating_add(beyond.saturating_mul(size::REF))
+    }
+
+    /// The floor of `directions` of the field on `grid` over `prep`, measured on as many of them
+    /// as [`MAX_MEASURED`] and [`MAX_PAIRS`] allow (in parallel on the current thread pool).
+    pub fn measure(prep: &Prepared<'_>, grid: &Grid, directions: Range<u32>) -> EntryFloor {
+        let triangles = prep.triangle_count() as u64;
+        let count = directions.len() as u64;
+        let mut floor = EntryFloor::per_triangle(triangles, directions.clone());
+        let measured = count.min(MAX_MEASURED).min(MAX_PAIRS / triangles.max(1));
+        if measured == 0 {
+            return floor;
+        }
+        let lattice = Lattice::new(grid.lattice_n).directions();
+        let areas = Areas::new(&prep.vertices, &prep.triangles);
+        let picks: Vec<u32> = (0..measured).map(|i| directions.start + (i * count / measured) as u32).collect();
+        let bounds: Vec<u64> =
+            picks.par_iter().map(|&j| areas.entries_at_least(grid, &frame(lattice[j as usize]))).collect();
+        // Each measured direction adds what it makes beyond the one entry per triangle counted.
+        floor.total = floor.total.saturating_add(bounds.iter().map(|b| b - triangles).sum());
+        floor.largest = bounds.iter().copied().max().unwrap_or(triangles);
+        floor
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::direction::{Scratch, build_direction};
+    use crate::params::{DepthPolicy, Params};
+    use crate::scene::Scene;
+
+    /// A grid of `side`² unit squares (two triangles each) in the plane z = x / 2.
+    fn sheet(side: usize) -> Scene {
+        let mut triangles = Vec::new();
+        for i in 0..side {
+            for j in 0..side {
+                let p = |di: usize, dj: usize| {
+                    let (x, y) = ((i + di) as f32, (j + dj) as f32);
+                    [x, y, x / 2.0]
+                };
+                triangles.push([p(0, 0), p(1, 0), p(1, 1)]);
+                triangles.push([p(0, 0), p(1, 1), p(0, 1)]);
+            }
+        }
+        Scene::from_triangles("sheet", &triangles).unwrap()
+    }
+
+    #[test]
+    fn the_floor_is_at_most_what_the_directions_make_and_counts_fine_tiles() {
+        let scene = sheet(12);
+        let prep = Prepared::new(&scene);
+        let params = Params { lattice_n: 3, tiles: 64, depth: DepthPolicy::default(), margin: 1e-6 };
+        let grid = params.grid(prep.radius);
+        let lattice = Lattice::new(3).directions();
+        let made: Vec<u64> = lattice
+            .iter()
+            .map(|&d| {
+                let data = build_direction(&prep, &params, &frame(d), 0, &mut Scratch::default()).unwrap();
+                data.stats.tile_triangle_sum
+            })
+            .collect();
+        let all = EntryFloor::measure(&prep, &grid, 0..lattice.len() as u32);
+        assert!(all.total <= made.iter().sum::<u64>(), "{all:?} against {made:?}");
+        assert!(all.largest <= *made.iter().max().unwrap());
+        // The sheet is 12 × 12 × √1.25 ≈ 161 square units across a grid 2R ≈ 19 wide: on 64² tiles
+        // each of its 288 triangles covers several of them in most directions.
+        let triangles = prep.triangle_count() as u64;
+        assert!(all.total > 2 * triangles * lattice.len() as u64, "{all:?}");
+        // A shard's floor covers its directions only, and the floors of a partition add up.
+        let (a, b) = (EntryFloor::measure(&prep, &grid, 0..7), EntryFloor::measure(&prep, &grid, 7..19));
+        assert_eq!(a.total + b.total, all.total);
+        assert_eq!(a.largest.max(b.largest), all.largest);
+        // Bytes: the format's lower bound, plus a ref for each entry beyond one per triangle.
+        let plain = size::lower_bound(19, 64 * 64, triangles);
+        assert_eq!(all.bytes_at_least(64, triangles), plain + (all.total - 19 * triangles) * size::REF);
+        assert_eq!(EntryFloor::per_triangle(triangles, 0..19).bytes_at_least(64, triangles), plain);
+    }
+}
