@@ -708,6 +708,35 @@ fn hostile_gltf_documents_are_errors() {
 }
 
 #[test]
+fn a_broken_primitive_is_refused_before_the_triangles_are_counted_or_made() {
+    // Mesh 0: 800 primitives of 2²⁴ − 1 sparse zeros, 5,592,405 triangles each, 4.47 · 10⁹ in all,
+    // past the 2³² − 1 a field holds. Mesh 1: a POSITION accessor whose bytes lie past its buffer.
+    // The count that refuses the first must see the second as the import does: a broken file,
+    // named as such, not one primitive of zero triangles beside too many others.
+    let dir = tempfile::tempdir().unwrap();
+    let mut doc = tiny_gltf();
+    doc["accessors"].as_array_mut().unwrap().extend([
+        json!({"componentType": 5126, "count": 16777215, "type": "VEC3",
+            "sparse": {"count": 1, "indices": {"bufferView": 1, "componentType": 5123}, "values": {"bufferView": 0}}}),
+        json!({"bufferView": 0, "byteOffset": 24, "componentType": 5126, "count": 3, "type": "VEC3"}),
+    ]);
+    doc["meshes"] = json!([
+        {"primitives": vec![json!({"attributes": {"POSITION": 2}}); 800]},
+        {"primitives": [{"attributes": {"POSITION": 3}}]}
+    ]);
+    doc["nodes"] = json!([{"mesh": 0}, {"mesh": 1}]);
+    doc["scenes"] = json!([{"nodes": [0, 1]}]);
+    let e = import_json(dir.path(), "broken.gltf", &doc).unwrap_err();
+    let ImportError::Gltf { message, .. } = &e else { panic!("not the broken accessor: {e}") };
+    assert!(message.starts_with("mesh 1 primitive 0: POSITION accessor 3: "), "{message}");
+    // Without the broken mesh, the count refuses the rest.
+    doc["nodes"] = json!([{"mesh": 0}]);
+    doc["scenes"] = json!([{"nodes": [0]}]);
+    let e = import_json(dir.path(), "many.gltf", &doc).unwrap_err();
+    assert!(matches!(e, ImportError::InstancesTooManyTriangles { triangles: 4_473_924_000, .. }), "{e}");
+}
+
+#[test]
 fn hostile_obj_texts_are_errors() {
     let dir = tempfile::tempdir().unwrap();
     let cases = [

@@ -5,58 +5,26 @@
 //! limit or past the memory this process can still allocate is refused at once, naming the
 //! numbers, instead of by the allocator's abort minutes later.
 
-use super::accessor::check_layout;
+use super::accessor::{check_primitive, triangles};
 use crate::memory;
 use crate::params::human_bytes;
 use crate::scene::{IMPORT_BYTES_PER_TRIANGLE, ImportError, SceneBuilder};
 use ::gltf as gl;
-use gl::accessor::{DataType, Dimensions};
-use gl::mesh::Mode;
 use std::path::Path;
 
 /// The most triangles a field holds: 2³² − 1 (triangle ids are u32).
 const MAX_TRIANGLES: u64 = u32::MAX as u64;
 
-/// The triangles a primitive of `mode` makes from `n` vertices (or indices): a list `n / 3`, a
-/// strip or fan `n − 2`; points and lines none.
-pub(super) fn triangles_of(mode: Mode, n: u64) -> u64 {
-    match mode {
-        Mode::Triangles => n / 3,
-        Mode::TriangleStrip | Mode::TriangleFan => n.saturating_sub(2),
-        Mode::Points | Mode::Lines | Mode::LineLoop | Mode::LineStrip => 0,
-    }
+/// The triangles the import will make of `primitive`, from its checked accessors' counts; none
+/// for one it skips, and the import's own message for one it refuses.
+fn primitive_triangles(primitive: &gl::Primitive, buffers: &[Vec<u8>]) -> Result<u64, String> {
+    Ok(check_primitive(primitive, buffers)?.map_or(0, |checked| triangles(primitive.mode(), &checked)))
 }
 
-/// The triangles the import will make of `primitive`, from its accessors' counts; none for one
-/// it skips or refuses (which the import then reports).
-fn primitive_triangles(primitive: &gl::Primitive, buffers: &[Vec<u8>]) -> u64 {
-    let mode = primitive.mode();
-    let Some(position) = primitive.get(&gl::Semantic::Positions) else { return 0 };
-    if position.data_type() != DataType::F32
-        || position.dimensions() != Dimensions::Vec3
-        || check_layout(&position, 12, buffers).is_err()
-    {
-        return 0;
-    }
-    let n = match primitive.indices() {
-        None => position.count(),
-        Some(ia) => {
-            let unsigned = matches!(ia.data_type(), DataType::U8 | DataType::U16 | DataType::U32);
-            if ia.dimensions() != Dimensions::Scalar
-                || !unsigned
-                || check_layout(&ia, ia.data_type().size(), buffers).is_err()
-            {
-                return 0;
-            }
-            ia.count()
-        }
-    };
-    triangles_of(mode, n as u64)
-}
-
-/// Counts the triangles the nodes of the glTF file at `path` `visits` (indices into `nodes`) instance, and refuses them if,
-/// with the triangles `builder` holds, they pass the format's limit, or if importing them needs
-/// more memory than [`memory::budget`] allows; else reserves room for them in `builder`.
+/// Counts the triangles the nodes of the glTF file at `path` `visits` (indices into `nodes`)
+/// instance, and refuses them if a primitive's accessors are ones the import refuses, if with the
+/// triangles `builder` holds they pass the format's limit, or if importing them needs more memory
+/// than [`memory::budget`] allows; else reserves room for them in `builder`.
 pub(super) fn check(
     builder: &mut SceneBuilder,
     path: &Path,
@@ -70,9 +38,20 @@ pub(super) fn check(
     let mut triangles = 0u64;
     for mesh in visits.iter().filter_map(|&i| nodes.get(i).and_then(gl::Node::mesh)) {
         let Some(slot) = per_mesh.get_mut(mesh.index()) else { continue };
-        let n = *slot.get_or_insert_with(|| {
-            mesh.primitives().map(|p| primitive_triangles(&p, buffers)).fold(0, u64::saturating_add)
-        });
+        let n = match *slot {
+            Some(n) => n,
+            None => {
+                let mut n = 0u64;
+                for p in mesh.primitives() {
+                    let location = format!("mesh {} primitive {}", mesh.index(), p.index());
+                    let message = |why| format!("{location}: {why}");
+                    let made = primitive_triangles(&p, buffers)
+                        .map_err(|why| ImportError::Gltf { path: path.to_path_buf(), message: message(why) })?;
+                    n = n.saturating_add(made);
+                }
+                *slot.insert(n)
+            }
+        };
         triangles = triangles.saturating_add(n);
     }
     let path = path.to_path_buf();

@@ -28,8 +28,7 @@ mod transform;
 use super::input::ReadFile;
 use crate::scene::{ImportError, MaterialDesc, SceneBuilder, SourceDesc};
 use ::gltf as gl;
-use accessor::check_layout;
-use gl::accessor::{DataType, Dimensions};
+use accessor::{Checked, check_primitive};
 use gl::json::validation::Validate;
 use gl::mesh::Mode;
 use records::{camera_record, light_record};
@@ -511,35 +510,11 @@ fn import_primitive(
         }
         Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan => {}
     }
-    let Some(position) = primitive.get(&gl::Semantic::Positions) else {
+    let checked = check_primitive(primitive, buffers).map_err(|why| ctx.err(format!("{location}: {why}")))?;
+    let Some(Checked { position, indices: index_accessor }) = checked else {
         ctx.warn(builder, format!("{location} (node {node}) has no POSITION attribute; skipped"));
         return Ok(());
     };
-    if position.data_type() != DataType::F32 || position.dimensions() != Dimensions::Vec3 {
-        return Err(ctx.err(format!(
-            "{location}: POSITION accessor {} holds {:?} of {:?}; only VEC3 of FLOAT is supported",
-            position.index(),
-            position.dimensions(),
-            position.data_type()
-        )));
-    }
-    check_layout(&position, 12, buffers)
-        .map_err(|why| ctx.err(format!("{location}: POSITION accessor {}: {why}", position.index())))?;
-    let index_accessor = primitive.indices();
-    if let Some(ia) = &index_accessor {
-        if ia.dimensions() != Dimensions::Scalar
-            || !matches!(ia.data_type(), DataType::U8 | DataType::U16 | DataType::U32)
-        {
-            return Err(ctx.err(format!(
-                "{location}: index accessor {} holds {:?} of {:?}; indices must be SCALAR unsigned integers",
-                ia.index(),
-                ia.dimensions(),
-                ia.data_type()
-            )));
-        }
-        check_layout(ia, ia.data_type().size(), buffers)
-            .map_err(|why| ctx.err(format!("{location}: index accessor {}: {why}", ia.index())))?;
-    }
 
     let reader = primitive.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
     let positions: Vec<[f64; 3]> = if position.count() == 0 {
@@ -569,7 +544,10 @@ fn import_primitive(
     if mode == Mode::Triangles && !n.is_multiple_of(3) {
         ctx.warn(builder, format!("{location}: {n} vertices is not a multiple of 3; the last {} are ignored", n % 3));
     }
-    let triangles = expand::triangles_of(mode, n as u64) as usize;
+    let triangles = match mode {
+        Mode::Triangles => n / 3,
+        _ => n.saturating_sub(2),
+    };
     if triangles == 0 {
         return Ok(());
     }
