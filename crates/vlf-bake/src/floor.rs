@@ -14,10 +14,10 @@ use vlf_raster::{Areas, Grid};
 
 /// Directions measured at most, spread evenly over the range; the others count one entry per
 /// triangle (still a lower bound).
-const MAX_MEASURED: u64 = 4096;
+pub const MAX_MEASURED: u64 = 4096;
 
 /// Triangle-direction pairs measured at most (about a tenth of a second on one core).
-const MAX_PAIRS: u64 = 1 << 26;
+pub const MAX_PAIRS: u64 = 1 << 26;
 
 /// Lower bounds on the entries of a range of a field's directions.
 #[derive(Clone, Debug, PartialEq, Eq)]
