@@ -60,8 +60,11 @@ impl Areas {
         self.areas
             .iter()
             .map(|&(n, slack)| {
-                let a = (n[0] * z[0] + n[1] * z[1] + n[2] * z[2]).abs() - slack;
-                ((a * per_tile).ceil() as u64).max(1)
+                let x = ((n[0] * z[0] + n[1] * z[1] + n[2] * z[2]).abs() - slack) * per_tile;
+                // ⌈x⌉ without `f64::ceil`, a libm call on the baseline x86-64 (no SSE4.1): the
+                // cast truncates, and saturates a negative `x` to 0.
+                let k = x as u64;
+                (k + ((k as f64) < x) as u64).max(1)
             })
             .sum()
     }
