@@ -107,8 +107,10 @@ pub struct BakeArgs {
     #[arg(long, default_value_t = DEFAULT_MAX_DEPTH, value_name = "D", value_parser = between(0, MAX_BSP_DEPTH),
           allow_negative_numbers = true)]
     pub max_depth: u32,
-    /// Size budget for automatic parameters, and a ceiling for explicit ones: a bake with explicit
-    /// parameters stops, leaving nothing behind, as soon as its field would exceed it (e.g. 4GiB, 512MiB, 1e9).
+    /// Size budget for automatic parameters, and a ceiling for explicit ones: explicit parameters
+    /// whose field cannot fit it (counting the tiles each triangle covers) are refused before
+    /// baking, and a bake stops, leaving nothing behind, as soon as its field would exceed it
+    /// (e.g. 4GiB, 512MiB, 1e9).
     #[arg(long, default_value = "4GiB", value_parser = size(), value_name = "SIZE", allow_negative_numbers = true)]
     pub max_bytes: u64,
     /// Automatic parameters aim at no more than this many bytes of field per triangle (any mesh
