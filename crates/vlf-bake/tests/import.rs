@@ -465,6 +465,30 @@ fn obj_huge_vertex() {
 }
 
 #[test]
+fn obj_with_a_byte_order_mark_and_unknown_statements() {
+    let dir = tempfile::tempdir().unwrap();
+    // A byte-order mark before the first vertex: four vertices, the face on the first three. It
+    // once read as an unknown word, so that the line was dropped and the face took vertices 2-4.
+    let path = dir.path().join("bom.obj");
+    std::fs::write(&path, "\u{feff}v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\n").unwrap();
+    let scene = import_paths(&[path]).unwrap();
+    assert_eq!(world(&scene), [[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]]);
+    assert!(scene.report.warnings.is_empty(), "{:?}", scene.report.warnings);
+    // Lines that are no statement are skipped, and said to be.
+    let path = dir.path().join("foreign.obj");
+    std::fs::write(&path, "# made by hand\nv 0 0 0\nvv 1 0 0\nv 1 0 0\nfoo bar\nv 0 1 0\nf 1 2 3\n").unwrap();
+    let scene = import_paths(&[path]).unwrap();
+    assert_eq!(world(&scene), [[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]]);
+    assert!(
+        scene.report.warnings.iter().any(|w| w.ends_with(
+            "foreign.obj: 2 line(s) hold no OBJ statement and were skipped; the first, line 3, reads \"vv 1 0 0\""
+        )),
+        "{:?}",
+        scene.report.warnings
+    );
+}
+
+#[test]
 fn obj_face_index_out_of_range() {
     match import_err("bad/out_of_range.obj") {
         ImportError::IndexOutOfRange { location, index, count, .. } => {

@@ -47,7 +47,10 @@ pub(super) fn import(
         let line = 1 + bytes[..e.valid_up_to()].iter().filter(|&&b| b == b'\n').count();
         err(format!("not UTF-8 text (invalid byte on line {line}); is this an OBJ file?"))
     })?;
-    if text.trim_start_matches('\u{feff}').trim_start().starts_with('{') {
+    // A byte-order mark is no part of the first statement (tobj would read `\u{feff}v` as an
+    // unknown word and drop the line, shifting every face's vertices).
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    if text.trim_start().starts_with('{') {
         return Err(err("this looks like glTF JSON, not OBJ text: give it the .gltf extension".to_string()));
     }
     let scan = scan(path, text)?;
@@ -166,6 +169,14 @@ pub(super) fn import(
             ));
         }
     }
+    if let Some((line, content)) = scan.first_foreign {
+        let shown: String = content.chars().take(40).collect();
+        warnings.push(format!(
+            "{}: {} line(s) hold no OBJ statement and were skipped; the first, line {line}, reads {shown:?}",
+            path.display(),
+            scan.foreign
+        ));
+    }
     builder.report_mut().warnings.extend(warnings);
 
     for (model_index, model) in models.iter().enumerate() {
@@ -238,6 +249,10 @@ pub(super) fn looks_like_obj(bytes: &[u8]) -> bool {
 struct Scan<'a> {
     /// There are `l` statements (removed before tobj sees the text).
     has_lines: bool,
+    /// Lines that are neither a statement nor a comment, which tobj skips, and the first of them
+    /// (its number and text).
+    foreign: usize,
+    first_foreign: Option<(usize, &'a str)>,
     /// Distinct material names given to `usemtl`, in order.
     usemtl: Vec<&'a str>,
     /// Number of `mtllib` statements.
@@ -255,7 +270,7 @@ fn scan<'a>(path: &Path, text: &'a str) -> Result<Scan<'a>, ImportError> {
 
     // Pass 1: totals (a face may name any vertex of the file by a positive index).
     let (mut v_total, mut vt_total, mut vn_total) = (0i64, 0i64, 0i64);
-    let mut statements = 0usize;
+    let (mut statements, mut foreign) = (0usize, 0usize);
     let mut first_foreign: Option<(usize, &str)> = None;
     for (n, line) in text.lines().enumerate() {
         let Some(word) = line.split_whitespace().next() else { continue };
@@ -270,8 +285,9 @@ fn scan<'a>(path: &Path, text: &'a str) -> Result<Scan<'a>, ImportError> {
         }
         if KEYWORDS.contains(&word) {
             statements += 1;
-        } else if first_foreign.is_none() {
-            first_foreign = Some((n + 1, line.trim()));
+        } else {
+            foreign += 1;
+            first_foreign = first_foreign.or(Some((n + 1, line.trim())));
         }
     }
     if let (0, Some((line, content))) = (statements, first_foreign) {
@@ -285,7 +301,7 @@ fn scan<'a>(path: &Path, text: &'a str) -> Result<Scan<'a>, ImportError> {
     }
 
     // Pass 2: statement by statement.
-    let mut scan = Scan { has_lines: false, usemtl: Vec::new(), mtllibs: 0 };
+    let mut scan = Scan { has_lines: false, foreign, first_foreign, usemtl: Vec::new(), mtllibs: 0 };
     let (mut v_seen, mut vt_seen, mut vn_seen) = (0i64, 0i64, 0i64);
     let mut object = "unnamed_object";
     for (n, line) in text.lines().enumerate() {
