@@ -442,3 +442,86 @@ fn a_scene_that_flattens_past_the_memory_is_refused_before_rendering() {
     assert!(start.elapsed().as_secs() < 20, "refused after {:?}", start.elapsed());
     assert_eq!(names_in(dir.path()), ["bunny.vlf", "many.json"], "something was written");
 }
+
+/// `packed` with one more section: of kind 99 (unknown: readers skip it), compressed, claiming
+/// `claim` decoded bytes from the fewest stored bytes the format allows (garbage: nothing gets to
+/// decode it), laid out canonically with a valid content hash.
+fn with_unpacking_bomb(packed: &Path, claim: u64) -> PathBuf {
+    use vlf_format::pack::{head_bytes, lay_out};
+    let bytes = std::fs::read(packed).unwrap();
+    let (header, mut table) = vlf_format::parse_head(&bytes, bytes.len() as u64).unwrap();
+    let mut sections: Vec<Vec<u8>> =
+        table.iter().map(|e| bytes[e.offset as usize..(e.offset + e.stored_length) as usize].to_vec()).collect();
+    let stored = claim.div_ceil(vlf_format::MAX_ZSTD_EXPANSION);
+    let bomb = vlf_format::SectionEntry {
+        kind: 99,
+        codec: vlf_format::codec::ZSTD,
+        stored_length: stored,
+        raw_length: claim,
+        element_size: 1,
+        raw_hash: [0; 32],
+        ..table[0]
+    };
+    table.push(bomb);
+    sections.push(vec![0x5a; stored as usize]);
+    let header = lay_out(&header, &mut table).unwrap();
+    let mut out = head_bytes(&header, &table);
+    for (e, data) in table.iter().zip(&sections) {
+        out.resize(e.offset as usize, 0);
+        out.extend_from_slice(data);
+    }
+    let path = packed.with_file_name("bomb.vlf");
+    std::fs::write(&path, out).unwrap();
+    path
+}
+
+#[test]
+fn a_packed_field_that_unpacks_past_the_memory_is_refused_before_decoding() {
+    // A few hundred kilobytes of zstd frames may claim tens of gigabytes: an adversarial sweep
+    // found `dump`, `trace` and `render` killed at 8 GB on a 674 KB field. Every command that
+    // decodes a field in memory holds it to the memory budget first.
+    let dir = tempdir();
+    let field = bunny(dir.path());
+    let packed = dir.path().join("packed.vlf");
+    vlf(&["pack", s(&field), "-o", s(&packed), "-q"]).ok();
+    let budget = common::memory_available().unwrap() / 4 * 3;
+    let claim = 2 * budget;
+    let bomb = with_unpacking_bomb(&packed, claim);
+    let rays = dir.path().join("rays.bin");
+    vlf(&["rays", s(&field), "--width", "4", "--height", "4", "-o", s(&rays)]).ok();
+    let png = dir.path().join("out.png");
+    let hits = dir.path().join("hits.bin");
+    for args in [
+        vec!["dump", s(&bomb)],
+        vec!["dump", s(&bomb), "--json"],
+        vec!["trace", s(&bomb), "--rays", s(&rays), "-o", s(&hits)],
+        vec!["render", s(&bomb), "-o", s(&png), "--width", "16", "--height", "16"],
+        vec!["rays", s(&bomb), "-o", s(&rays)],
+    ] {
+        let r = vlf(&args);
+        let expected = format!(
+            "cannot open {}: it is a packed field that unpacks to {} in memory, but ",
+            bomb.display(),
+            gib(claim)
+        );
+        if args.contains(&"--json") {
+            let r = r.fails_with(1);
+            let j: serde_json::Value = serde_json::from_str(r.stdout.trim()).unwrap();
+            assert!(j["error"].as_str().unwrap().starts_with(&expected), "{j}");
+            continue;
+        }
+        let line = r.one_error_line();
+        assert!(line.starts_with(&format!("error: {expected}")), "{}: {line}", args[0]);
+        assert!(line.ends_with("`vlf-bake unpack` decodes it to a file instead"), "{line}");
+    }
+    // A scene file's fields are held to the budget each.
+    let scene = dir.path().join("scene.json");
+    std::fs::write(&scene, r#"{"instances": [{"field": "packed.vlf"}, {"field": "bomb.vlf"}]}"#).unwrap();
+    let line = vlf(&["trace", "--scene", s(&scene), "--rays", s(&rays), "-o", s(&hits)]).one_error_line().to_string();
+    assert!(
+        line.contains("instance 1: key \"field\"")
+            && line.contains("unpacks to")
+            && line.contains("more than the limit"),
+        "{line}"
+    );
+}

@@ -13,7 +13,7 @@ use serde_json::{Map, Value};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
-use vlf_runtime::Field;
+use vlf_runtime::{Field, OpenOptions};
 
 /// The largest scene file read: JSON this long describes millions of instances.
 pub const MAX_FILE_BYTES: u64 = 64 << 20;
@@ -228,6 +228,15 @@ impl SceneFile {
     /// opened (`field`), a name no triangle comes from (`remove`), a mesh that cannot be read or
     /// does not fit in the field's bounding sphere (`insert`).
     pub fn load(&self, meshes: MeshLoader<'_>) -> Result<Scene, SceneFileError> {
+        self.load_with(meshes, &OpenOptions::new())
+    }
+
+    /// [`SceneFile::load`], opening the fields with `options` (a packed field's cap on the memory
+    /// it decodes into, [`OpenOptions::max_unpacked_bytes`], applies to each field).
+    ///
+    /// # Errors
+    /// As [`SceneFile::load`].
+    pub fn load_with(&self, meshes: MeshLoader<'_>, options: &OpenOptions) -> Result<Scene, SceneFileError> {
         let dir = self.path.parent().unwrap_or(Path::new(""));
         let ctx = Ctx { path: &self.path, dir };
         // One mapping per file, however its path is spelled (`a.vlf`, `./a.vlf`, a link).
@@ -236,7 +245,8 @@ impl SceneFile {
         let mut opened: HashMap<&Path, Arc<Field>> = HashMap::new();
         for (i, spec) in self.instances.iter().enumerate() {
             if !opened.contains_key(keys[i].as_path()) {
-                let f = Field::open(&spec.field)
+                let f = options
+                    .open(&spec.field)
                     .map_err(|e| ctx.fail(i, "field", format!("cannot open {}: {e}", spec.field.display())))?;
                 opened.insert(&keys[i], Arc::new(f));
             }

@@ -8,11 +8,10 @@ use std::time::Instant;
 use vlf_bake::inspect;
 use vlf_bake::params::human_bytes;
 use vlf_bake::{Progress, pack::check_packed_file};
-use vlf_runtime::Field;
 
 /// `vlf-bake dump`: describes a field, and with `--verify` checks every byte.
 pub fn run(a: &DumpArgs) -> Result<()> {
-    let field = Field::open(&a.field)?;
+    let field = super::open_field(&a.field)?;
     let info = match field.packed_layout() {
         Some(layout) => inspect::describe_packed(field.reader(), layout),
         None => inspect::describe(field.reader()),

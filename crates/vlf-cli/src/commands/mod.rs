@@ -16,9 +16,31 @@ pub mod scene;
 pub mod trace;
 
 use crate::args::CacheChoice;
-use anyhow::Result;
+use anyhow::{Result, anyhow};
 use std::io::Write;
+use std::path::Path;
 use vlf_bake::cache::Cache;
+use vlf_bake::params::human_bytes;
+use vlf_runtime::{Field, FormatError, OpenError, OpenOptions};
+
+/// Opens the field at `path` for the commands that query or describe it. A packed field is
+/// decoded into memory, so it is held to the memory budget of every up-front check
+/// (`vlf_bake::memory::budget`): a few hundred kilobytes of zstd frames can claim gigabytes,
+/// which are refused before anything is allocated, naming `vlf-bake unpack`, which decodes to
+/// disk.
+pub fn open_field(path: &Path) -> Result<Field> {
+    let (budget, why) = vlf_bake::memory::budget();
+    OpenOptions::new().max_unpacked_bytes(budget).open(path).map_err(|e| match e {
+        OpenError::Format { error: FormatError::UnpackedTooLarge { bytes, .. }, path } => anyhow!(
+            "cannot open {}: it is a packed field that unpacks to {} in memory, but {} may be used ({why}); \
+             `vlf-bake unpack` decodes it to a file instead",
+            path.display(),
+            human_bytes(bytes),
+            human_bytes(budget)
+        ),
+        other => other.into(),
+    })
+}
 
 /// Prints one line (or several joined by newlines) on standard output and flushes it, so that a
 /// closed pipe is reported here (and `main` treats it as success).

@@ -12,7 +12,7 @@ use vlf_bake::atomic::write_atomically;
 use vlf_bake::params::human_bytes;
 use vlf_render::SceneBounds;
 use vlf_render::setup::{CameraRequest, Framing, choose_camera};
-use vlf_runtime::{Field, Ray};
+use vlf_runtime::Ray;
 
 /// What `rays` prints, and its `--json` keys.
 #[derive(serde::Serialize)]
@@ -28,7 +28,7 @@ struct RaysSummary<'a> {
 /// `vlf-bake rays`: writes one primary ray per pixel of the camera framing the field's scene.
 pub fn run(a: &RaysArgs) -> Result<()> {
     check_outputs(&[("FIELD", &a.field)], &[("-o/--output", &a.output)])?;
-    let field = Field::open(&a.field)?;
+    let field = super::open_field(&a.field)?;
     let (framing, view_name) = match a.view {
         View::Outside => (Framing::Outside, "outside"),
         View::Inside => (Framing::Inside, "inside"),

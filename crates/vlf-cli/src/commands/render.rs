@@ -12,7 +12,6 @@ use std::time::Instant;
 use vlf_bake::Progress;
 use vlf_bake::atomic::write_atomically;
 use vlf_render::{Scene, SceneBounds, SceneOptions};
-use vlf_runtime::Field;
 
 /// `vlf-bake render`: ray traces a picture of a field (and of its work) and prints the summary.
 pub fn run(a: &RenderArgs) -> Result<()> {
@@ -27,7 +26,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
             BadUsage("--frames, --move and --path need --scene: a field alone has nothing to move".into()).into()
         );
     }
-    let field = Field::open(path)?;
+    let field = super::open_field(path)?;
     let bounds = SceneBounds::of(&field);
     let cameras: Vec<_> = field.cameras().collect();
     let field_lights: Vec<_> = field.lights().collect();

@@ -12,16 +12,19 @@ use std::time::Instant;
 use vlf_bake::Progress;
 use vlf_bake::atomic::write_atomically;
 use vlf_render::{SceneBounds, SceneOptions};
-use vlf_runtime::{Hit, Ray};
+use vlf_runtime::{Hit, OpenOptions, Ray};
 use vlf_scene::{Affine, Scene, SceneFile};
 
 /// Reads, checks and loads a scene file: fields opened once each, meshes to insert read with the
 /// bake's importer. The scene file must be a regular file (a device would be read without end, a
 /// pipe waited on); so must the fields (`Field::open`) and meshes (the importer) it names: each
-/// reader refuses anything else (`vlf_runtime::regular`).
+/// reader refuses anything else (`vlf_runtime::regular`). A packed field is held to the memory
+/// budget, as `super::open_field` holds one given alone.
 pub fn load(path: &Path) -> Result<Scene> {
     let meshes = |p: &Path| vlf_bake::import::import_paths(&[p]).map(|s| s.world_vertices()).map_err(|e| e.to_string());
-    Ok(SceneFile::read(path)?.load(&meshes)?)
+    let mut options = OpenOptions::new();
+    options.max_unpacked_bytes(vlf_bake::memory::budget().0);
+    Ok(SceneFile::read(path)?.load_with(&meshes, &options)?)
 }
 
 /// `trace --scene`: one hit per ray (`prim` the triangle in the hit instance's field) and, with

@@ -91,7 +91,7 @@ pub fn run(a: &TraceArgs) -> Result<()> {
             super::scene::trace(a, scene, &rays)?
         }
         (Some(path), None) => {
-            let field = Field::open(path)?;
+            let field = super::open_field(path)?;
             rays = read_rays(&a.rays)?;
             trace_field(a, &field, &rays)
         }
