@@ -23,6 +23,12 @@ pub enum BakeError {
         "the field outgrew the --max-bytes ceiling of {ceiling} bytes ({at_least} bytes or more after {baked} of {directions} directions); lower --directions or --tiles, or raise --max-bytes"
     )]
     OverBudget { ceiling: u64, at_least: u64, baked: usize, directions: usize },
+    /// A direction's tile blocks grew past what it may take: long triangles on fine tiles land
+    /// in many tiles, and in many leaves of each.
+    #[error(
+        "direction {direction}'s tile blocks pass the {limit} a direction may take ({why}); lower --tiles or --directions, or --threads"
+    )]
+    DirectionOverLimit { direction: usize, limit: String, why: &'static str },
     /// A direction's buffers (a few bytes per tile) could not be allocated.
     #[error(
         "direction {direction} needs {bytes} bytes more for its {tiles} × {tiles} tiles, which cannot be allocated; lower --tiles or --threads"

@@ -2,24 +2,27 @@
 //! sample directions for real ([`sample_direction_bytes`]), which is how a [`Prepared`] scene
 //! answers [`crate::params::Measure`].
 
-use crate::direction::{DirectionData, Scratch, build_direction};
+use crate::direction::{DirectionData, Limit, Scratch, build_direction};
 use crate::error::BakeError;
 use crate::floor::EntryFloor;
-use crate::params::{Measure, Params, Sample};
+use crate::params::{Coverage, Measure, Params, Sample};
 use crate::prepare::Prepared;
 use crate::statistics::merge_stats;
 use rayon::prelude::*;
-use vlf_format::StatisticsRecord;
+use vlf_format::{StatisticsRecord, size};
 use vlf_geom::Lattice;
 use vlf_geom::frame::frame;
 
 /// Bakes `samples` directions of a field with `params`, spread evenly over the lattice, and
-/// returns the mean bytes a direction adds to the file and their summed statistics.
+/// returns the mean bytes a direction adds to the file and their summed statistics. A direction
+/// whose blocks pass its share of `max_bytes` (or its thread's share of the memory) is stopped
+/// there: the mean is then `None`, the field being more than `max_bytes`.
 pub fn sample_direction_bytes(
     prep: &Prepared<'_>,
     params: &Params,
     samples: usize,
-) -> Result<(u64, StatisticsRecord), BakeError> {
+    max_bytes: u64,
+) -> Result<(Option<u64>, StatisticsRecord), BakeError> {
     let lattice = Lattice::new(params.lattice_n);
     let dirs = lattice.directions();
     let l = dirs.len();
@@ -27,18 +30,27 @@ pub fn sample_direction_bytes(
         .map(|i| (i * l) / samples.min(l) + (l / samples.min(l)) / 2)
         .map(|j| j.min(l - 1))
         .collect();
+    // The field's estimate is `l` times the mean of the samples, so once one sample passes
+    // `max_bytes · samples / l` the field cannot fit: stop it there (long thin triangles on fine
+    // tiles make blocks of gigabytes that were baked to their end only to be refused).
+    let threads = rayon::current_num_threads().min(picks.len());
+    let share = (max_bytes as u128 * picks.len() as u128 / l as u128) as u64;
+    let limit = Limit::memory(threads).min(Limit { words: share / size::LEAF_WORD, why: "the size budget" });
     let results: Vec<Result<DirectionData, BakeError>> = picks
         .par_iter()
-        .map_init(Scratch::default, |s, &j| build_direction(prep, params, &frame(dirs[j]), j, s))
+        .map_init(Scratch::default, |s, &j| build_direction(prep, params, &frame(dirs[j]), j, s, limit))
         .collect();
     let mut bytes = 0;
     let mut stats = StatisticsRecord::zeroed_record();
     for r in results {
-        let d = r?;
+        let d = match r {
+            Err(BakeError::DirectionOverLimit { .. }) => return Ok((None, stats)),
+            other => other?,
+        };
         bytes += d.bytes();
         merge_stats(&mut stats, &d.stats);
     }
-    Ok((bytes / picks.len() as u64, stats))
+    Ok((Some(bytes / picks.len() as u64), stats))
 }
 
 /// A prepared scene measures a candidate's directions by baking a few of them.
@@ -53,13 +65,44 @@ impl Measure for Prepared<'_> {
         self.radius
     }
 
-    fn sample(&self, params: &Params, directions: usize) -> Result<Sample, BakeError> {
-        let (bytes_per_direction, statistics) = sample_direction_bytes(self, params, directions)?;
-        Ok(Sample { bytes_per_direction, statistics })
+    fn sample(&self, params: &Params, directions: usize, max_bytes: u64) -> Result<Sample, BakeError> {
+        let (bytes, statistics) = sample_direction_bytes(self, params, directions, max_bytes)?;
+        Ok(Sample { bytes_per_direction: bytes.unwrap_or(max_bytes.saturating_add(1)), statistics })
     }
 
-    fn entries_at_least(&self, params: &Params) -> u64 {
+    fn coverage(&self, params: &Params) -> Coverage {
         let directions = Lattice::new(params.lattice_n).direction_count() as u32;
-        EntryFloor::measure(self, &params.grid(self.radius), 0..directions).total
+        let floor = EntryFloor::measure(self, &params.grid(self.radius), 0..directions);
+        Coverage { at_least: floor.total, per_direction: floor.mean }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::params::DepthPolicy;
+    use crate::scene::Scene;
+
+    #[test]
+    fn a_sample_past_its_share_of_the_budget_is_not_baked_to_its_end() {
+        // A fan of 2,000 long thin triangles across a disc: on 64² tiles each crosses dozens of
+        // tiles, and the leaves of the tiles near the centre hold most of them.
+        let n = 2000;
+        let point = |k: usize| {
+            let a = std::f32::consts::TAU * k as f32 / n as f32;
+            [a.cos(), a.sin(), 0.1 * (k % 7) as f32]
+        };
+        let triangles: Vec<[[f32; 3]; 3]> = (1..n - 1).map(|k| [point(0), point(k), point(k + 1)]).collect();
+        let scene = Scene::from_triangles("fan", &triangles).unwrap();
+        let prep = Prepared::new(&scene);
+        let params = Params { lattice_n: 3, tiles: 64, depth: DepthPolicy::default(), margin: 1e-6 };
+        let (Some(mean), _) = sample_direction_bytes(&prep, &params, 4, u64::MAX).unwrap() else {
+            panic!("no limit, yet stopped")
+        };
+        // With a budget the 19 directions fit at that mean, every sample is baked; with one they
+        // do not fit by a wide margin, the samples stop.
+        let fits = mean * 19;
+        assert_eq!(sample_direction_bytes(&prep, &params, 4, fits).unwrap().0, Some(mean));
+        assert_eq!(sample_direction_bytes(&prep, &params, 4, mean).unwrap().0, None);
     }
 }

@@ -21,7 +21,7 @@ pub const MAX_MEASURED: u64 = 4096;
 pub const MAX_PAIRS: u64 = 1 << 26;
 
 /// Lower bounds on the entries of a range of a field's directions.
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct EntryFloor {
     /// The directions covered.
     pub directions: Range<u32>,
@@ -29,13 +29,16 @@ pub struct EntryFloor {
     pub total: u64,
     /// At least this many in the direction that makes the most (the largest bound measured).
     pub largest: u64,
+    /// The mean of the bounds of the directions measured (one per triangle if none was): the
+    /// estimate for a direction that was not.
+    pub mean: f64,
 }
 
 impl EntryFloor {
     /// One entry per triangle in each direction: the floor where no direction is measured.
     pub fn per_triangle(triangles: u64, directions: Range<u32>) -> EntryFloor {
         let count = directions.len() as u64;
-        EntryFloor { directions, total: count.saturating_mul(triangles), largest: triangles }
+        EntryFloor { directions, total: count.saturating_mul(triangles), largest: triangles, mean: triangles as f64 }
     }
 
     /// At least how many bytes a field (or shard) of these directions on `tiles`² tiles over
@@ -66,6 +69,7 @@ impl EntryFloor {
         // Each measured direction adds what it makes beyond the one entry per triangle counted.
         floor.total = floor.total.saturating_add(bounds.iter().map(|b| b - triangles).sum());
         floor.largest = bounds.iter().copied().max().unwrap_or(triangles);
+        floor.mean = bounds.iter().sum::<u64>() as f64 / measured as f64;
         floor
     }
 }
@@ -73,7 +77,7 @@ impl EntryFloor {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::direction::{Scratch, build_direction};
+    use crate::direction::{Limit, Scratch, build_direction};
     use crate::params::{DepthPolicy, Params};
     use crate::scene::Scene;
 
@@ -103,7 +107,8 @@ mod tests {
         let made: Vec<u64> = lattice
             .iter()
             .map(|&d| {
-                let data = build_direction(&prep, &params, &frame(d), 0, &mut Scratch::default()).unwrap();
+                let data =
+                    build_direction(&prep, &params, &frame(d), 0, &mut Scratch::default(), Limit::FORMAT).unwrap();
                 data.stats.tile_triangle_sum
             })
             .collect();

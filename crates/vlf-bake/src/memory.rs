@@ -172,10 +172,10 @@ mod tests {
     #[test]
     fn entries_past_any_machine_are_refused_whatever_the_grid() {
         // 16² tiles, but 2⁴⁰ triangle-tile pairs in the largest direction: 40 TiB touched.
-        let floor = EntryFloor { directions: 0..3, total: 3 << 40, largest: 1 << 40 };
+        let floor = EntryFloor { directions: 0..3, total: 3 << 40, largest: 1 << 40, mean: (1u64 << 40) as f64 };
         let text = check(16, 2, &floor).expect_err("no machine running these tests has 40 TiB free").to_string();
         assert!(text.contains("triangle-tile pairs, 1099511627776 or more in the largest direction"), "{text}");
-        let one = EntryFloor { directions: 0..1, total: 1 << 20, largest: 1 << 20 };
+        let one = EntryFloor { directions: 0..1, total: 1 << 20, largest: 1 << 20, mean: (1u64 << 20) as f64 };
         check(16, 2, &one).expect("a megabyte of pairs fits");
     }
 }

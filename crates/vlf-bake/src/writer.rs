@@ -7,7 +7,7 @@
 //! the old field or the new one, never a partial one.
 
 use crate::atomic::AtomicFile;
-use crate::direction::{DirectionData, Scratch, build_direction};
+use crate::direction::{DirectionData, Limit, Scratch, build_direction};
 use crate::disk::Need;
 use crate::error::BakeError;
 use crate::floor::EntryFloor;
@@ -237,6 +237,11 @@ pub fn write_into(
         + size::STATISTICS;
     let over_budget =
         |at_least: u64, baked: usize| BakeError::OverBudget { ceiling, at_least, baked, directions: l as usize };
+    // A direction alone may take no more than its thread's share of the memory, nor than the
+    // ceiling: long triangles on fine tiles land in many tiles and leaves, and a direction that
+    // cannot fit stops as soon as it passes instead of when it is done.
+    let limit = Limit::memory(rayon::current_num_threads())
+        .min(Limit { words: ceiling / size::LEAF_WORD, why: "the --max-bytes ceiling" });
     let mut sections = DirectionSections::open(&mut f, range.len() as u64, n2).map_err(io_err)?;
 
     // Directions are baked in parallel, chunk by chunk; a writer thread appends each finished
@@ -271,7 +276,7 @@ pub fn write_into(
             let result: Result<Vec<DirectionData>, BakeError> = chunk_range
                 .into_par_iter()
                 .map_init(Scratch::default, |s, j| {
-                    let d = build_direction(prep, params, &rotations[j], j, s);
+                    let d = build_direction(prep, params, &rotations[j], j, s, limit);
                     progress.advance(1);
                     d
                 })

@@ -6,7 +6,7 @@
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use std::hint::black_box;
-use vlf_bake::direction::{Scratch, build_direction};
+use vlf_bake::direction::{Limit, Scratch, build_direction};
 use vlf_bake::{DepthPolicy, Params, Prepared};
 use vlf_bench::experiments::paper_scene;
 use vlf_geom::Lattice;
@@ -30,7 +30,9 @@ fn one_direction(c: &mut Criterion) {
         let m = frame(dirs[dirs.len() / 3]);
         let mut scratch = Scratch::default();
         g.bench_function(format!("{tiles}² tiles"), |b| {
-            b.iter(|| black_box(build_direction(&prep, &params, &m, 7, &mut scratch).unwrap().words.len()))
+            b.iter(|| {
+                black_box(build_direction(&prep, &params, &m, 7, &mut scratch, Limit::FORMAT).unwrap().words.len())
+            })
         });
     }
     g.finish();

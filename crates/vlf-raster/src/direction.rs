@@ -50,11 +50,16 @@ pub struct TileBlock {
     pub refs: u64,
 }
 
-/// A direction's blocks would not fit the format's 32-bit offsets: `count` words already written.
+/// A direction's blocks would pass `limit` words (the format's 32-bit offsets, or a caller's
+/// limit on the memory they take): `count` words written or being written when it was known.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct TooLarge {
     pub count: u64,
+    pub limit: u64,
 }
+
+/// The most words a direction's blocks can take: the format's 32-bit offsets.
+pub const MAX_WORDS: u64 = u32::MAX as u64;
 
 /// Why [`build_direction`] failed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -149,8 +154,18 @@ impl Grid {
 
     /// Appends to `out` the block of a tile whose entries are `entries` (at least one, in
     /// increasing triangle id): its leaves by the depth policy, each ref in every leaf its z
-    /// range meets. `TooLarge` if the block would end past the format's 32-bit offsets.
-    pub fn write_tile(&self, entries: &[Entry], s: &mut Scratch, out: &mut Vec<u64>) -> Result<TileBlock, TooLarge> {
+    /// range meets. `TooLarge` if `out` would pass `limit` words (at most [`MAX_WORDS`], the
+    /// format's 32-bit offsets), found while the refs are sorted into leaves: a tile of long
+    /// triangles may put each in hundreds of leaves, and its refs take no more than the limit
+    /// allows before it is refused.
+    pub fn write_tile(
+        &self,
+        entries: &[Entry],
+        s: &mut Scratch,
+        out: &mut Vec<u64>,
+        limit: u64,
+    ) -> Result<TileBlock, TooLarge> {
+        let limit = limit.min(MAX_WORDS);
         debug_assert!(!entries.is_empty() && entries.windows(2).all(|w| w[0].tri < w[1].tri));
         // The tile's z range, non-empty.
         s.slabs.clear();
@@ -175,20 +190,22 @@ impl Grid {
         for leaf in &mut s.leaf_refs[..k] {
             leaf.clear();
         }
+        let offset = out.len() as u64;
+        let past = |refs: u64| offset + block_words(k, refs as usize) as u64 > limit;
+        let mut refs = 0u64;
         for en in entries {
             let (z0, z1) = (en.z[0] as u32, en.z[1] as u32);
             let first = s.bounds[1..k].partition_point(|&b| b < z0);
-            for (leaf, refs) in s.leaf_refs[first..k].iter_mut().enumerate() {
+            for (leaf, leaf_refs) in s.leaf_refs[first..k].iter_mut().enumerate() {
                 if s.bounds[first + leaf] > z1 {
                     break;
                 }
-                refs.push(Ref { id: en.tri, x: [en.cells[0], en.cells[1]], y: [en.cells[2], en.cells[3]] });
+                leaf_refs.push(Ref { id: en.tri, x: [en.cells[0], en.cells[1]], y: [en.cells[2], en.cells[3]] });
+                refs += 1;
             }
-        }
-        let refs: u64 = s.leaf_refs[..k].iter().map(|l| l.len() as u64).sum();
-        let offset = out.len() as u64;
-        if offset + block_words(k, refs as usize) as u64 > u32::MAX as u64 {
-            return Err(TooLarge { count: offset });
+            if past(refs) {
+                return Err(TooLarge { count: offset + block_words(k, refs as usize) as u64, limit });
+            }
         }
         let bounds: Vec<u16> = s.bounds.iter().map(|&b| b as u16).collect();
         let leaves: Vec<&[Ref]> = s.leaf_refs[..k].iter().map(|l| l.as_slice()).collect();
@@ -199,13 +216,15 @@ impl Grid {
 
 /// Builds the direction whose rotation is `m` over `triangles` (three indices each into
 /// `vertices`, which are relative to the field's centre): its TILES entries, its blocks and
-/// statistics. A triangle's id is its index in `triangles`.
+/// statistics. A triangle's id is its index in `triangles`. `TooLarge` if its blocks would pass
+/// `limit` words ([`Grid::write_tile`]).
 pub fn build_direction(
     vertices: &[[f64; 3]],
     triangles: &[[u32; 3]],
     grid: &Grid,
     m: &[f64; 9],
     s: &mut Scratch,
+    limit: u64,
 ) -> Result<DirectionData, DirectionError> {
     let n2 = grid.tiles as usize * grid.tiles as usize;
     s.projected.clear();
@@ -253,7 +272,7 @@ pub fn build_direction(
             continue;
         }
         let offset = out.words.len() as u32;
-        let block = grid.write_tile(entries, s, &mut out.words)?;
+        let block = grid.write_tile(entries, s, &mut out.words, limit)?;
         out.tiles.push(offset);
         let depth = (block.leaves as u64).next_power_of_two().trailing_zeros();
         out.stats.tile_triangle_sum += entries.len() as u64;

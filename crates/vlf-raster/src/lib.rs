@@ -16,5 +16,7 @@ pub mod leaves;
 pub mod raster;
 
 pub use coverage::Areas;
-pub use direction::{DirectionData, DirectionError, Entry, Grid, Scratch, TileBlock, TooLarge, build_direction};
+pub use direction::{
+    DirectionData, DirectionError, Entry, Grid, MAX_WORDS, Scratch, TileBlock, TooLarge, build_direction,
+};
 pub use leaves::{DEFAULT_LEAF_SIZE, DEFAULT_MAX_DEPTH, DepthPolicy};

@@ -350,7 +350,7 @@ fn update_direction(
             continue;
         }
         let offset = out.words.len() as u32;
-        grid.write_tile(&entries[start..at], scratch, &mut out.words).map_err(|_| TooLarge)?;
+        grid.write_tile(&entries[start..at], scratch, &mut out.words, vlf_raster::MAX_WORDS).map_err(|_| TooLarge)?;
         out.tiles.push((tile, offset));
     }
     Ok(out)

@@ -282,12 +282,41 @@ pub trait Measure {
     fn triangle_count(&self) -> u64;
     /// The radius of the scene's bounding sphere, in world units.
     fn radius(&self) -> f64;
-    /// Measures `directions` sample directions of a field with `params`.
-    fn sample(&self, params: &Params, directions: usize) -> Result<Sample, Self::Error>;
-    /// At least how many entries (triangle-tile pairs) all the directions of a field with
-    /// `params` make, from the triangles' areas (`crate::floor`): explicit parameters are held to
-    /// `--max-bytes` with it.
-    fn entries_at_least(&self, params: &Params) -> u64;
+    /// Measures `directions` sample directions of a field with `params`. A direction that passes
+    /// `max_bytes` (the budget: such a field cannot fit it) need not be baked to its end; its
+    /// bytes are then given as at least what was made, more than `max_bytes`.
+    fn sample(&self, params: &Params, directions: usize, max_bytes: u64) -> Result<Sample, Self::Error>;
+    /// How many entries (triangle-tile pairs) the directions of a field with `params` make, from
+    /// the triangles' projected areas and lengths alone, without baking (`crate::floor`).
+    fn coverage(&self, params: &Params) -> Coverage;
+}
+
+/// What [`Measure::coverage`] tells of a field's triangle-tile pairs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Coverage {
+    /// At least this many in all directions: explicit parameters are held to `--max-bytes` by it.
+    pub at_least: u64,
+    /// About this many in a direction: candidates of automatic parameters whose pairs alone
+    /// would pass the budget are not baked to be measured (long thin triangles on fine tiles
+    /// make millions).
+    pub per_direction: f64,
+}
+
+impl Coverage {
+    /// One pair per triangle in each of `directions` directions: what the format's lower bound
+    /// counts.
+    pub fn one_each(triangles: u64, directions: u64) -> Coverage {
+        Coverage { at_least: triangles.saturating_mul(directions), per_direction: triangles as f64 }
+    }
+
+    /// The bytes of a field of `directions` directions on `tiles`² tiles over `triangles`
+    /// triangles whose directions each make `per_direction` pairs: the tiles' records and a ref
+    /// for each pair (the blocks' headers and leaf words not counted).
+    fn bytes_about(&self, directions: u64, tiles: u32, triangles: u64) -> u64 {
+        let refs = (self.per_direction * directions as f64) as u64;
+        size::lower_bound(directions, tiles as u64 * tiles as u64, triangles)
+            .saturating_add(refs.saturating_sub(directions.saturating_mul(triangles)).saturating_mul(size::REF))
+    }
 }
 
 /// A lower bound on a field's size (`vlf_format::size::lower_bound`): every tile costs a record
@@ -301,8 +330,16 @@ fn params_for(radius: f64, lattice_n: u32, tiles: u32, depth: DepthPolicy) -> Pa
     Params { lattice_n, tiles, depth, margin: radius * MARGIN_FRACTION }
 }
 
+/// Whether a candidate may fit `budget`, before it is baked to be measured: its lower bound, then
+/// its tiles' records with a ref for each of its triangle-tile pairs (measured on the triangles'
+/// projections, [`Measure::coverage`]), are within it.
+fn may_fit<M: Measure>(scene: &M, p: &Params, budget: u64) -> bool {
+    let (tris, l) = (scene.triangle_count(), Lattice::new(p.lattice_n).direction_count());
+    lower_bound_bytes(tris, p.lattice_n, p.tiles) <= budget && scene.coverage(p).bytes_about(l, p.tiles, tris) <= budget
+}
+
 /// The first of `lattices` on which `tiles`² tiles fit `budget`, with its estimated size and
-/// load; rungs whose lower bound is over the budget are not estimated.
+/// load; rungs that cannot fit it ([`may_fit`]) are not estimated.
 fn first_that_fits<M: Measure>(
     scene: &M,
     lattices: impl Iterator<Item = u32>,
@@ -311,11 +348,11 @@ fn first_that_fits<M: Measure>(
     depth: DepthPolicy,
 ) -> Result<Option<(Params, u64, f64)>, M::Error> {
     for lattice_n in lattices {
-        if lower_bound_bytes(scene.triangle_count(), lattice_n, tiles) > budget {
+        let p = params_for(scene.radius(), lattice_n, tiles, depth);
+        if !may_fit(scene, &p, budget) {
             continue;
         }
-        let p = params_for(scene.radius(), lattice_n, tiles, depth);
-        let (bytes, load) = estimate(scene, &p)?;
+        let (bytes, load) = estimate(scene, &p, budget)?;
         if bytes <= budget {
             return Ok(Some((p, bytes, load)));
         }
@@ -325,8 +362,8 @@ fn first_that_fits<M: Measure>(
 
 /// Estimated size of a field: sample directions measured, scaled to all directions; and the mean
 /// triangles per non-empty tile of the sample.
-fn estimate<M: Measure>(scene: &M, p: &Params) -> Result<(u64, f64), M::Error> {
-    let sample = scene.sample(p, SAMPLE_DIRECTIONS)?;
+fn estimate<M: Measure>(scene: &M, p: &Params, budget: u64) -> Result<(u64, f64), M::Error> {
+    let sample = scene.sample(p, SAMPLE_DIRECTIONS, budget)?;
     let stats = &sample.statistics;
     let l = Lattice::new(p.lattice_n).direction_count();
     let nonempty = (stats.tile_count - stats.empty_tiles).max(1);
@@ -352,7 +389,7 @@ pub fn choose<M: Measure>(scene: &M, config: &BakeConfig) -> Result<Choice, M::E
         let mut lb = lower_bound_bytes(tris, lattice_n, tiles);
         if lb <= budget {
             let l = Lattice::new(lattice_n).direction_count();
-            let beyond = scene.entries_at_least(&params).saturating_sub(l.saturating_mul(tris));
+            let beyond = scene.coverage(&params).at_least.saturating_sub(l.saturating_mul(tris));
             lb = lb.saturating_add(beyond.saturating_mul(size::REF));
         }
         if lb > budget {
@@ -388,11 +425,11 @@ pub fn choose<M: Measure>(scene: &M, config: &BakeConfig) -> Result<Choice, M::E
     let sparse_stop = config.tiles.is_none();
     let mut chosen: Option<(Params, u64, f64)> = None;
     for &(lattice_n, tiles) in &rungs {
-        if lower_bound_bytes(tris, lattice_n, tiles) > auto_budget {
+        let p = params_for(scene.radius(), lattice_n, tiles, config.depth);
+        if !may_fit(scene, &p, auto_budget) {
             break;
         }
-        let p = params_for(scene.radius(), lattice_n, tiles, config.depth);
-        let (bytes, load) = estimate(scene, &p)?;
+        let (bytes, load) = estimate(scene, &p, auto_budget)?;
         if bytes > auto_budget {
             break;
         }

@@ -63,7 +63,7 @@ impl Measure for Model {
         2.0
     }
 
-    fn sample(&self, p: &Params, directions: usize) -> Result<Sample, ParamsError> {
+    fn sample(&self, p: &Params, directions: usize, _max_bytes: u64) -> Result<Sample, ParamsError> {
         assert_eq!(directions, SAMPLE_DIRECTIONS);
         self.sampled.borrow_mut().push((p.lattice_n, p.tiles));
         let n2 = p.tiles as u64 * p.tiles as u64;
@@ -73,8 +73,8 @@ impl Measure for Model {
         Ok(Sample { bytes_per_direction: self.bytes_per_direction(p.tiles), statistics })
     }
 
-    fn entries_at_least(&self, p: &Params) -> u64 {
-        self.triangles * Lattice::new(p.lattice_n).direction_count()
+    fn coverage(&self, p: &Params) -> Coverage {
+        Coverage::one_each(self.triangles, Lattice::new(p.lattice_n).direction_count())
     }
 }
 
@@ -94,12 +94,12 @@ impl Measure for Unmeasured {
     fn radius(&self) -> f64 {
         4.0
     }
-    fn sample(&self, _: &Params, _: usize) -> Result<Sample, ParamsError> {
+    fn sample(&self, _: &Params, _: usize, _: u64) -> Result<Sample, ParamsError> {
         panic!("explicit parameters need no estimate")
     }
-    fn entries_at_least(&self, p: &Params) -> u64 {
+    fn coverage(&self, p: &Params) -> Coverage {
         // Each triangle in `covered` tiles of every direction.
-        self.triangle_count() * self.covered * Lattice::new(p.lattice_n).direction_count()
+        Coverage::one_each(self.triangle_count() * self.covered, Lattice::new(p.lattice_n).direction_count())
     }
 }
 
