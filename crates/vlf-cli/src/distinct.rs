@@ -61,13 +61,28 @@ fn normalised(path: &Path) -> PathBuf {
     }
 }
 
+/// How a command writes its outputs, for [`check_outputs`].
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub enum Writes {
+    /// Files only: fields, shards and reports, made whole in a temporary file and renamed into
+    /// place. An existing device or FIFO is refused.
+    Files,
+    /// Streams, written through an existing device or FIFO (`-o /dev/null`, a named pipe) and
+    /// atomically to any other path: pictures, rays, hits, OBJ.
+    Through,
+}
+
 /// Refuses an output that is the same file as one of `inputs` or as an earlier output (a
 /// [`BadUsage`]); each path comes with the name of its flag or argument (`-o/--output`, `--rays`,
 /// `INPUT`). Then refuses an output whose directory cannot take a new file
-/// ([`crate::limits::check_writable`]): both before the work, so that no command works for
-/// minutes, or writes one output, only to fail on another.
-pub fn check_outputs(inputs: &[(&str, &Path)], outputs: &[(&str, &Path)]) -> anyhow::Result<()> {
+/// ([`crate::limits::check_writable`]) and, for [`Writes::Files`], an output that exists and is
+/// not a regular file ([`crate::limits::check_regular_outputs`]): all before the work, so that no
+/// command works for minutes, or writes one output, only to fail on another.
+pub fn check_outputs(inputs: &[(&str, &Path)], outputs: &[(&str, &Path)], writes: Writes) -> anyhow::Result<()> {
     check_distinct(inputs, outputs)?;
+    if writes == Writes::Files {
+        crate::limits::check_regular_outputs(outputs)?;
+    }
     crate::limits::check_writable(outputs)
 }
 

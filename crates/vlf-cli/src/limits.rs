@@ -65,6 +65,23 @@ pub fn check_writable(outputs: &[(&str, &Path)]) -> Result<()> {
     Ok(())
 }
 
+/// Refuses outputs that exist and are neither a regular file nor a directory (a device, FIFO or
+/// socket: `/dev/null`, `/dev/full`), for the outputs that must be files: fields and shards, made
+/// in a temporary file with positioned writes and renamed into place, and reports. Checked before
+/// the work, so that `bake -o /dev/null` does not import and choose parameters for seconds only to
+/// be refused by the write. (A directory is [`check_writable`]'s to refuse.)
+pub fn check_regular_outputs(outputs: &[(&str, &Path)]) -> Result<()> {
+    for (flag, path) in outputs {
+        if let Ok(meta) = std::fs::metadata(path)
+            && !meta.is_dir()
+            && let Err(e) = vlf_runtime::regular::check_regular_file(&meta)
+        {
+            bail!("cannot write {flag} {}: {e}; give the path of a file", path.display());
+        }
+    }
+    Ok(())
+}
+
 /// Refuses to go on if `needed` bytes of memory are more than the budget of
 /// [`vlf_bake::memory::budget`] (the one rule of every up-front memory check). `what` names the
 /// work and its parts (`a 20000×20000 picture (framebuffer 16.4 GiB, …)`).

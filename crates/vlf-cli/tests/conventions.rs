@@ -456,3 +456,58 @@ fn a_failure_with_json_prints_its_error_as_one_json_object() {
     assert_eq!(r.stdout, "");
     bad_usage(vlf(&["dump", s(&field), "--json", "--no-such-flag"]), "unexpected argument '--no-such-flag' found");
 }
+/// An output that must be a file (a field, a shard, a report) but is an existing device is
+/// refused before any work, naming its flag: `bake -o /dev/null` used to import and choose the
+/// parameters first (12 s on a large mesh), and `--report /dev/full` to bake and commit the field
+/// before failing on the report. Outputs written through a device (pictures, rays, hits, OBJ) are
+/// not refused.
+#[cfg(unix)]
+#[test]
+fn a_file_output_that_is_a_device_is_refused_before_the_work() {
+    let dir = tempdir();
+    let d = dir.path();
+    let in_dir = |args: &[&str]| common::run(common::command().current_dir(d).args(args));
+    std::fs::write(d.join("t.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    box_field(d, "box", [-1.0; 3], [1.0; 3]);
+    in_dir(&["pack", "box.vlf", "-o", "p.vlf", "-q"]).ok();
+    let before = names_in(d);
+    let device = |flag: &str, path: &str| {
+        format!("error: cannot write {flag} {path}: it is a character device, not a regular file")
+    };
+    let cases: [(&[&str], String); 7] = [
+        (&["bake", "t.obj", "-o", "/dev/null"], device("-o/--output", "/dev/null")),
+        (&["bake", "t.obj", "-o", "/dev/full", "--shard", "0/2"], device("-o/--output", "/dev/full")),
+        (&["bake", "t.obj", "-o", "f.vlf", "--report", "/dev/full"], device("--report", "/dev/full")),
+        (&["merge", "box.vlf", "-o", "/dev/null"], device("-o/--output", "/dev/null")),
+        (&["merge", "box.vlf", "-o", "f.vlf", "--report", "/dev/full"], device("--report", "/dev/full")),
+        (&["pack", "box.vlf", "-o", "/dev/null"], device("-o/--output", "/dev/null")),
+        (&["unpack", "p.vlf", "-o", "/dev/null"], device("-o/--output", "/dev/null")),
+    ];
+    for (args, says) in cases {
+        // One line: the automatic choice of parameters was not even announced.
+        let r = in_dir(args);
+        assert!(r.one_error_line().starts_with(&says), "`{}`:\n{}", r.what, r.stderr);
+        assert_eq!(names_in(d), before, "`{}` wrote a file", r.what);
+    }
+    // Streams still go through a device.
+    in_dir(&["gen", "grid", "--count", "2", "-o", "/dev/null", "-q"]).ok();
+    in_dir(&["rays", "box.vlf", "-o", "/dev/null", "--width", "8", "--height", "8", "-q"]).ok();
+}
+
+/// A directory named on the command line that is missing, or is a file, is named for which.
+#[test]
+fn directories_that_are_missing_or_files_say_which() {
+    let dir = tempdir();
+    let d = dir.path();
+    let file = d.join("file.txt");
+    std::fs::write(&file, "x").unwrap();
+    let missing = d.join("nonexist");
+    vlf(&["cache", "list", "--cache-dir", s(&missing)])
+        .fails_saying(&[&format!("the cache directory {} does not exist", s(&missing))]);
+    vlf(&["cache", "list", "--cache-dir", s(&file)])
+        .fails_saying(&[&format!("the cache directory {} is not a directory", s(&file))]);
+    vlf(&["demo", "--output-dir", s(&file)])
+        .fails_saying(&[&format!("--output-dir {} exists and is not a directory", s(&file))]);
+    assert_eq!(names_in(d), ["file.txt"]);
+}
+

@@ -2,7 +2,7 @@
 
 use super::{resolve_cache, stdout_line};
 use crate::args::BakeArgs;
-use crate::distinct::check_outputs;
+use crate::distinct::{Writes, check_outputs};
 use crate::progress::Bar;
 use anyhow::{Context, Result};
 use vlf_bake::job::{BakeJob, run_bake_job};
@@ -13,7 +13,11 @@ use vlf_bake::{BakeConfig, DepthPolicy};
 pub fn run(a: &BakeArgs) -> Result<()> {
     let inputs: Vec<_> = a.inputs.iter().map(|i| ("INPUT", i.as_path())).collect();
     let report = a.report.as_deref().map(|r| ("--report", r));
-    check_outputs(&inputs, &[[("-o/--output", a.output.as_path())].as_slice(), report.as_slice()].concat())?;
+    check_outputs(
+        &inputs,
+        &[[("-o/--output", a.output.as_path())].as_slice(), report.as_slice()].concat(),
+        Writes::Files,
+    )?;
     let config = BakeConfig {
         directions: a.directions,
         tiles: a.tiles,
@@ -45,7 +49,11 @@ pub fn run(a: &BakeArgs) -> Result<()> {
         }
     }
     if let Some(path) = &a.report {
-        out.report.write(path).with_context(|| format!("cannot write the report {}", path.display()))?;
+        // Checked up front (`check_outputs`), so only a failing disk gets here: the bake is done.
+        let what = if out.shard.is_some() { "shard" } else { "field" };
+        out.report.write(path).with_context(|| {
+            format!("the {what} {} was written, but cannot write the report {}", a.output.display(), path.display())
+        })?;
     }
     let summary = &out.summary;
     if a.json {

@@ -4,6 +4,7 @@
 
 use super::stdout_line;
 use crate::args::{GenArgs, SceneKind};
+use crate::distinct::{Writes, check_outputs};
 use crate::limits::check_disk;
 use crate::values::{BadUsage, MAX_TRIANGLES};
 use anyhow::{Context, Result};
@@ -46,6 +47,7 @@ pub fn run(a: &GenArgs) -> Result<()> {
         }
     };
     let bound = generate::obj_bytes_at_most(name, triangles, max_abs);
+    check_outputs(&[], &[("-o/--output", &a.output)], Writes::Through)?;
     check_disk(&a.output, bound, true, &format!("an OBJ of {triangles} {name} triangles"))?;
     let bytes = write_atomically(&a.output, |w| {
         match a.scene {

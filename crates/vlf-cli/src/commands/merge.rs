@@ -2,7 +2,7 @@
 
 use super::{resolve_cache, stdout_line};
 use crate::args::MergeArgs;
-use crate::distinct::check_outputs;
+use crate::distinct::{Writes, check_outputs};
 use crate::progress::Bar;
 use anyhow::{Context, Result};
 use vlf_bake::job::run_merge_job;
@@ -12,7 +12,11 @@ use vlf_bake::params::human_bytes;
 pub fn run(a: &MergeArgs) -> Result<()> {
     let parts: Vec<_> = a.parts.iter().map(|p| ("SHARD", p.as_path())).collect();
     let report = a.report.as_deref().map(|r| ("--report", r));
-    check_outputs(&parts, &[[("-o/--output", a.output.as_path())].as_slice(), report.as_slice()].concat())?;
+    check_outputs(
+        &parts,
+        &[[("-o/--output", a.output.as_path())].as_slice(), report.as_slice()].concat(),
+        Writes::Files,
+    )?;
     let (cache, cache_note) = resolve_cache(&a.cache, a.quiet);
     let bar = Bar::new(a.quiet || a.json);
     let out = run_merge_job(&a.parts, &a.output, cache, cache_note, &bar)?;
@@ -22,7 +26,10 @@ pub fn run(a: &MergeArgs) -> Result<()> {
         }
     }
     if let Some(path) = &a.report {
-        out.report.write(path).with_context(|| format!("cannot write the report {}", path.display()))?;
+        // Checked up front (`check_outputs`), so only a failing disk gets here: the merge is done.
+        out.report.write(path).with_context(|| {
+            format!("the field {} was written, but cannot write the report {}", a.output.display(), path.display())
+        })?;
     }
     let s = &out.summary;
     if a.json {

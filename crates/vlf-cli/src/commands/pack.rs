@@ -2,7 +2,7 @@
 
 use super::stdout_line;
 use crate::args::{PackArgs, UnpackArgs};
-use crate::distinct::check_outputs;
+use crate::distinct::{Writes, check_outputs};
 use crate::progress::Bar;
 use anyhow::Result;
 use vlf_bake::pack::{pack_path, unpack_path};
@@ -10,7 +10,7 @@ use vlf_bake::params::human_bytes;
 
 /// `vlf-bake pack`: compresses a field for transport and prints the summary.
 pub fn pack(a: &PackArgs) -> Result<()> {
-    check_outputs(&[("FIELD", &a.field)], &[("-o/--output", &a.output)])?;
+    check_outputs(&[("FIELD", &a.field)], &[("-o/--output", &a.output)], Writes::Files)?;
     let bar = Bar::new(a.quiet || a.json);
     let s = pack_path(&a.field, &a.output, a.level, &bar)?;
     if a.json {
@@ -35,7 +35,7 @@ pub fn pack(a: &PackArgs) -> Result<()> {
 
 /// `vlf-bake unpack`: restores the raw field and prints the summary.
 pub fn unpack(a: &UnpackArgs) -> Result<()> {
-    check_outputs(&[("PACKED", &a.packed)], &[("-o/--output", &a.output)])?;
+    check_outputs(&[("PACKED", &a.packed)], &[("-o/--output", &a.output)], Writes::Files)?;
     let bar = Bar::new(a.quiet || a.json);
     let s = unpack_path(&a.packed, &a.output, &bar)?;
     if a.json {

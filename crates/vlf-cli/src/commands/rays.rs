@@ -4,7 +4,7 @@
 
 use super::stdout_line;
 use crate::args::{RaysArgs, View};
-use crate::distinct::check_outputs;
+use crate::distinct::{Writes, check_outputs};
 use crate::limits::check_disk;
 use anyhow::{Context, Result};
 use std::io::Write;
@@ -27,7 +27,7 @@ struct RaysSummary<'a> {
 
 /// `vlf-bake rays`: writes one primary ray per pixel of the camera framing the field's scene.
 pub fn run(a: &RaysArgs) -> Result<()> {
-    check_outputs(&[("FIELD", &a.field)], &[("-o/--output", &a.output)])?;
+    check_outputs(&[("FIELD", &a.field)], &[("-o/--output", &a.output)], Writes::Through)?;
     let field = super::open_field(&a.field)?;
     let (framing, view_name) = match a.view {
         View::Outside => (Framing::Outside, "outside"),

@@ -3,7 +3,7 @@
 
 use super::picture::{setup, summarise};
 use crate::args::RenderArgs;
-use crate::distinct::check_outputs;
+use crate::distinct::{Writes, check_outputs};
 use crate::progress::Bar;
 use crate::values::BadUsage;
 use anyhow::{Context, Result};
@@ -18,7 +18,11 @@ pub fn run(a: &RenderArgs) -> Result<()> {
     // Every flag's range was checked as it was parsed (`crate::values`).
     let source = a.field.as_deref().map(|f| ("FIELD", f)).or(a.scene.as_deref().map(|s| ("--scene", s)));
     let work = a.work_image.as_deref().map(|w| ("--work-image", w));
-    check_outputs(source.as_slice(), &[[("-o/--output", a.output.as_path())].as_slice(), work.as_slice()].concat())?;
+    check_outputs(
+        source.as_slice(),
+        &[[("-o/--output", a.output.as_path())].as_slice(), work.as_slice()].concat(),
+        Writes::Through,
+    )?;
     let Some(path) = &a.field else { return super::scene::render(a) };
     // (clap does not enforce `requires` against an argument that conflicts with one present.)
     if a.frames.is_some() || !a.moves.is_empty() || a.path.is_some() {

@@ -2,7 +2,7 @@
 
 use super::stdout_line;
 use crate::args::TraceArgs;
-use crate::distinct::check_outputs;
+use crate::distinct::{Writes, check_outputs};
 use crate::limits::{check_disk, check_memory};
 use crate::values::BadUsage;
 use anyhow::{Context, Result, bail};
@@ -82,6 +82,7 @@ pub fn run(a: &TraceArgs) -> Result<()> {
     check_outputs(
         &[source.as_slice(), &[("--rays", a.rays.as_path())]].concat(),
         &[[("-o/--output", a.output.as_path())].as_slice(), ids.as_slice()].concat(),
+        Writes::Through,
     )?;
     check_room(a)?;
     let rays;
