@@ -123,7 +123,7 @@ pub struct BakeArgs {
     /// (default: RAYON_NUM_THREADS, else all cores). The output does not depend on it.
     #[arg(long, value_name = "T", value_parser = between(1, MAX_THREADS), allow_negative_numbers = true)]
     pub threads: Option<usize>,
-    /// No progress bar and no summary on success.
+    /// No progress bar and no summary on success (warnings and errors still print).
     #[arg(short, long)]
     pub quiet: bool,
     /// Print the summary as one JSON object.
@@ -164,7 +164,7 @@ pub struct MergeArgs {
     /// Write a JSON report to FILE (the schema of `bake --report`).
     #[arg(long, value_name = "FILE.json")]
     pub report: Option<PathBuf>,
-    /// No progress bar and no summary on success.
+    /// No progress bar and no summary on success (warnings and errors still print).
     #[arg(short, long)]
     pub quiet: bool,
     /// Print the summary as one JSON object.
@@ -235,7 +235,7 @@ pub struct PackArgs {
     /// cores); each compresses whole sections.
     #[arg(long, value_name = "T", value_parser = between(1, MAX_THREADS), allow_negative_numbers = true)]
     pub threads: Option<usize>,
-    /// No progress bar and no summary on success.
+    /// No progress bar and no summary on success (warnings and errors still print).
     #[arg(short, long)]
     pub quiet: bool,
     /// Print the summary (sizes, ratio, MB/s, per-section codecs) as one JSON object.
@@ -250,7 +250,7 @@ pub struct UnpackArgs {
     /// The raw field to write (replaced atomically).
     #[arg(short, long, value_name = "FIELD")]
     pub output: PathBuf,
-    /// No progress bar and no summary on success.
+    /// No progress bar and no summary on success (warnings and errors still print).
     #[arg(short, long)]
     pub quiet: bool,
     /// Print the summary (sizes, ratio, MB/s) as one JSON object.
@@ -281,7 +281,7 @@ pub struct TraceArgs {
     /// Answer any-hit (shadow) queries instead of closest-hit.
     #[arg(long)]
     pub any_hit: bool,
-    /// No summary on success.
+    /// No summary on success (warnings and errors still print).
     #[arg(short, long)]
     pub quiet: bool,
     /// Print rays, hits, seconds (tracing only) and mrays_per_s as one JSON object.
@@ -317,7 +317,7 @@ pub struct RaysArgs {
     /// Image height in pixels, 1 to 65535 (default 480; with --width alone, 3:4 of it).
     #[arg(long, value_name = "PIXELS", value_parser = between(1, MAX_IMAGE_SIDE), allow_negative_numbers = true)]
     pub height: Option<u32>,
-    /// No summary on success.
+    /// No summary on success (warnings and errors still print).
     #[arg(short, long)]
     pub quiet: bool,
     /// Print the summary (output, rays, width, height, view, bytes) as one JSON object.
@@ -440,7 +440,7 @@ pub struct RenderArgs {
     /// cores). The picture does not depend on it.
     #[arg(long, value_name = "T", value_parser = between(1, MAX_THREADS), allow_negative_numbers = true)]
     pub threads: Option<usize>,
-    /// No progress bar and no summary on success.
+    /// No progress bar and no summary on success (warnings and errors still print).
     #[arg(short, long)]
     pub quiet: bool,
     /// Print the summary as one JSON object.
@@ -478,7 +478,7 @@ pub struct GenArgs {
     /// The OBJ file to write.
     #[arg(short, long, value_name = "FILE")]
     pub output: PathBuf,
-    /// No summary on success.
+    /// No summary on success (warnings and errors still print).
     #[arg(short, long)]
     pub quiet: bool,
     /// Print the summary (output, scene, triangles, seed, bytes) as one JSON object.

@@ -113,6 +113,33 @@ fn bad_meshes_get_exactly_the_errors_and_warnings_the_docs_table_lists() {
     }
 }
 
+/// `--quiet` hides the progress bar and the summary, not warnings: the dropped triangles of the
+/// table's rows and a missing material library are still reported, on standard error only.
+#[test]
+fn quiet_bakes_still_print_their_warnings() {
+    let dir = tempdir();
+    let out = dir.path().join("out.vlf");
+    let triangle = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+    let missing_mtl = dir.path().join("missing_mtl.obj");
+    std::fs::write(&missing_mtl, format!("mtllib missing.mtl\n{triangle}")).unwrap();
+    for (input, says) in [
+        (mesh("bad/degenerate.obj"), "dropped 2 degenerate (zero-area) triangles"),
+        (mesh("bad/degenerate.gltf"), "dropped 2 degenerate (zero-area) triangles"),
+        (missing_mtl, "missing.mtl"),
+    ] {
+        // (`bake` gives --quiet.)
+        let r = bake(&input, &out, &[]).ok();
+        assert_eq!(r.stdout, "", "`{}`", r.what);
+        let lines: Vec<&str> = r.stderr.lines().collect();
+        assert!(
+            !lines.is_empty() && lines.iter().all(|l| l.starts_with("warning: ")) && r.stderr.contains(says),
+            "`{}`: {}",
+            r.what,
+            r.stderr
+        );
+    }
+}
+
 // ---------------------------------------------------------------------------------------------
 // Damaged fields through `dump --verify`
 

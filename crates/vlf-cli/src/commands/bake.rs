@@ -26,7 +26,7 @@ pub fn run(a: &BakeArgs) -> Result<()> {
         max_bytes_per_triangle: a.max_bytes_per_triangle,
     };
     config.validate()?;
-    let (cache, cache_note) = resolve_cache(&a.cache, a.quiet);
+    let (cache, cache_note) = resolve_cache(&a.cache);
     let bar = Bar::new(a.quiet || a.json);
     let explain = |choice: &vlf_bake::Choice| {
         if choice.automatic {
@@ -43,10 +43,9 @@ pub fn run(a: &BakeArgs) -> Result<()> {
         on_choice: (!a.quiet && !a.json).then_some(&explain as &dyn Fn(&vlf_bake::Choice)),
     };
     let out = run_bake_job(&job, &bar)?;
-    if !a.quiet {
-        for w in out.import.warnings.iter().chain(&out.warnings) {
-            eprintln!("warning: {w}");
-        }
+    // Warnings print whatever --quiet says: it hides the progress bar and the summary only.
+    for w in out.import.warnings.iter().chain(&out.warnings) {
+        eprintln!("warning: {w}");
     }
     if let Some(path) = &a.report {
         // Checked up front (`check_outputs`), so only a failing disk gets here: the bake is done.

@@ -17,13 +17,12 @@ pub fn run(a: &MergeArgs) -> Result<()> {
         &[[("-o/--output", a.output.as_path())].as_slice(), report.as_slice()].concat(),
         Writes::Files,
     )?;
-    let (cache, cache_note) = resolve_cache(&a.cache, a.quiet);
+    let (cache, cache_note) = resolve_cache(&a.cache);
     let bar = Bar::new(a.quiet || a.json);
     let out = run_merge_job(&a.parts, &a.output, cache, cache_note, &bar)?;
-    if !a.quiet {
-        for w in &out.warnings {
-            eprintln!("warning: {w}");
-        }
+    // Warnings print whatever --quiet says: it hides the progress bar and the summary only.
+    for w in &out.warnings {
+        eprintln!("warning: {w}");
     }
     if let Some(path) = &a.report {
         // Checked up front (`check_outputs`), so only a failing disk gets here: the merge is done.

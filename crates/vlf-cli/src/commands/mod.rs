@@ -53,14 +53,12 @@ pub fn stdout_line(s: &str) -> Result<()> {
 
 /// The cache to use for `--cache-dir` / `--no-cache` / `VLF_CACHE_DIR`, or why there is none. A
 /// cache directory that cannot be created is not an error (a cache only ever saves time): the bake
-/// goes on without it, with a warning unless `quiet`.
-pub fn resolve_cache(choice: &CacheChoice, quiet: bool) -> (Option<Cache>, Option<String>) {
+/// goes on without it, with a warning (printed under `--quiet` too, as every warning is).
+pub fn resolve_cache(choice: &CacheChoice) -> (Option<Cache>, Option<String>) {
     match vlf_bake::cache::resolve(choice.cache_dir.clone(), choice.no_cache, "--no-cache", "--cache-dir") {
         Ok(Ok(cache)) => (Some(cache), None),
         Ok(Err(note)) => {
-            if !quiet {
-                eprintln!("warning: {note}");
-            }
+            eprintln!("warning: {note}");
             (None, Some(note))
         }
         Err(note) => (None, Some(note)),
