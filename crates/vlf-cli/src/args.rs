@@ -3,8 +3,8 @@
 //! commands and the libraries.
 
 use crate::values::{
-    MAX_BSP_DEPTH, MAX_DIRECTIONS, MAX_IMAGE_SIDE, MAX_THREADS, MAX_TILES, MAX_TRIANGLES, between, parse_light,
-    parse_png_path, parse_up, parse_vec3, real, size,
+    MAX_BSP_DEPTH, MAX_DIRECTIONS, MAX_IMAGE_SIDE, MAX_THREADS, MAX_TILES, between, duration, parse_colour,
+    parse_light, parse_png_path, parse_up, parse_vec3, real, size,
 };
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use std::path::PathBuf;
@@ -199,7 +199,7 @@ pub enum CacheAction {
         #[arg(long, value_parser = size(), value_name = "SIZE", allow_negative_numbers = true)]
         max_size: Option<u64>,
         /// Remove entries not used for this long (e.g. 30d, 12h, 90m).
-        #[arg(long, value_parser = vlf_bake::cache::parse_duration, value_name = "DURATION")]
+        #[arg(long, value_parser = duration(), value_name = "DURATION", allow_hyphen_values = true)]
         max_age: Option<std::time::Duration>,
     },
 }
@@ -361,10 +361,11 @@ pub struct RenderArgs {
     /// With --frames: how far the moved instances turn by the last frame, in degrees about the
     /// --up axis through the centre of each (-36000 to 36000).
     #[arg(long, value_name = "DEGREES", default_value_t = 0.0, value_parser = real(-36000.0, 36000.0, (false, false)),
-          allow_negative_numbers = true)]
+          allow_negative_numbers = true, requires = "frames")]
     pub spin: f64,
     /// With --frames: how long each frame shows, in milliseconds (1 to 60000).
-    #[arg(long, value_name = "MS", default_value_t = 40, value_parser = between(1u16, 60_000), allow_negative_numbers = true)]
+    #[arg(long, value_name = "MS", default_value_t = 40, value_parser = between(1u16, 60_000), allow_negative_numbers = true,
+          requires = "frames")]
     pub frame_ms: u16,
     /// The PNG to write (the name must end in .png).
     #[arg(short, long, value_name = "IMAGE.png", value_parser = parse_png_path)]
@@ -421,7 +422,7 @@ pub struct RenderArgs {
           allow_negative_numbers = true)]
     pub ambient: f64,
     /// A solid background colour R,G,B (linear, 0 to 1) instead of the sky gradient.
-    #[arg(long, value_name = "R,G,B", value_parser = parse_vec3)]
+    #[arg(long, value_name = "R,G,B", value_parser = parse_colour, allow_hyphen_values = true)]
     pub background: Option<[f64; 3]>,
     /// Flat shading: no normals interpolated across edges.
     #[arg(long)]
@@ -464,10 +465,9 @@ pub struct GenArgs {
     #[arg(value_enum)]
     pub scene: SceneKind,
     /// Number of triangles (random, slivers: 1 to 4294967295) or cells per side (grid: 1 to 23170,
-    /// making 8 × count² triangles).
-    #[arg(long, default_value_t = 10_000, value_name = "N", value_parser = between(1, MAX_TRIANGLES),
-          allow_negative_numbers = true)]
-    pub count: u64,
+    /// making 8 × count² triangles). Its range depends on the scene, so `gen` checks it.
+    #[arg(long, default_value = "10000", value_name = "N", allow_hyphen_values = true)]
+    pub count: String,
     /// Seed of the random scenes: the same seed gives the same file, byte for byte.
     #[arg(long, default_value_t = 1, value_name = "S", value_parser = between(0, u64::MAX), allow_negative_numbers = true)]
     pub seed: u64,

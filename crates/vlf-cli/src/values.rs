@@ -1,5 +1,5 @@
 //! Parsers of flag values: numbers within a range, sizes (`4GiB`), points (`x,y,z`), lights
-//! (`x,y,z,intensity`), up directions and PNG paths; and [`BadUsage`], a bad command line found
+//! (`x,y,z,intensity`), colours (`r,g,b`), up directions and PNG paths; and [`BadUsage`], a bad command line found
 //! after parsing.
 //!
 //! Every numeric flag goes through [`between`] (or [`real`], [`size`]), so a value that is out of
@@ -80,12 +80,18 @@ where
 
     fn parse_ref(&self, cmd: &Command, arg: Option<&Arg>, value: &OsStr) -> Result<T, clap::Error> {
         let text = value.to_string_lossy();
+        self.check(&flag_name(arg), &text, "").map_err(|e| usage_error(cmd, e.0))
+    }
+}
+
+impl<T: FromStr + PartialOrd + Display + Copy> Between<T> {
+    /// `text` as a number in the range, or the message of [`between`] for the flag `flag`, with
+    /// `context` after the range (` for a grid (...)`): for a flag whose range depends on another,
+    /// checked after parsing.
+    pub fn check(&self, flag: &str, text: &str, context: &str) -> Result<T, BadUsage> {
         match text.trim().parse::<T>() {
             Ok(v) if v >= self.min && v <= self.max => Ok(v),
-            _ => Err(usage_error(
-                cmd,
-                format!("{} must be between {} and {}, got {text}", flag_name(arg), self.min, self.max),
-            )),
+            _ => Err(BadUsage(format!("{flag} must be between {} and {}{context}, got {text}", self.min, self.max))),
         }
     }
 }
@@ -160,6 +166,54 @@ impl clap::builder::TypedValueParser for Size {
                 ),
             )
         })
+    }
+}
+
+/// A duration such as `30d`, `12h`, `90m` or `3600s` ([`vlf_bake::cache::parse_duration`]), with
+/// the message shape of [`between`] for one that is negative or too large.
+#[derive(Clone, Copy, Debug)]
+pub struct Duration;
+
+/// A duration (see [`Duration`]).
+pub fn duration() -> Duration {
+    Duration
+}
+
+/// The longest duration [`vlf_bake::cache::parse_duration`] takes: less than 10¹⁵ seconds.
+const DURATION_SECONDS_BELOW: f64 = 1e15;
+
+impl clap::builder::TypedValueParser for Duration {
+    type Value = std::time::Duration;
+
+    fn parse_ref(&self, cmd: &Command, arg: Option<&Arg>, value: &OsStr) -> Result<std::time::Duration, clap::Error> {
+        let text = value.to_string_lossy();
+        let why = match vlf_bake::cache::parse_duration(&text) {
+            Ok(d) => return Ok(d),
+            Err(why) => why,
+        };
+        let flag = flag_name(arg);
+        // A well-formed number and unit that the range refused: its sign or its size is at fault.
+        let t = text.trim();
+        let (negative, magnitude) = match t.strip_prefix('-') {
+            Some(rest) => (true, rest),
+            None => (false, t.strip_prefix('+').unwrap_or(t)),
+        };
+        let split = magnitude.find(|c: char| c.is_ascii_alphabetic()).unwrap_or(magnitude.len());
+        let (number, unit) = magnitude.split_at(split);
+        let plain = !number.trim().is_empty() && number.trim().bytes().all(|b| b.is_ascii_digit() || b == b'.');
+        let known_unit = vlf_bake::cache::parse_duration(&format!("0{unit}")).is_ok();
+        let message = match number.trim().parse::<f64>() {
+            Ok(n) if plain && known_unit && negative && n > 0.0 => format!("{flag} must not be negative, got {text}"),
+            Ok(_) if plain && known_unit && !negative => {
+                let days = ((DURATION_SECONDS_BELOW - 1.0) / 86400.0).floor();
+                format!(
+                    "{flag} {text} is too large: the longest duration is {days}d ({} seconds, about 31 million years)",
+                    days * 86400.0
+                )
+            }
+            _ => format!("{flag} must be a duration such as 30d, 12h, 90m or 3600s, got {text}: {why}"),
+        };
+        Err(usage_error(cmd, message))
     }
 }
 
@@ -253,14 +307,30 @@ pub fn parse_light(s: &str) -> Result<[f64; 4], String> {
     Ok([v[0], v[1], v[2], v[3]])
 }
 
+/// Parses a colour `r,g,b`: three numbers from 0 to 1 (linear).
+pub fn parse_colour(s: &str) -> Result<[f64; 3], String> {
+    let v = parse_vec3(s)?;
+    if let Some(i) = v.iter().position(|c| !(0.0..=1.0).contains(c)) {
+        return Err(format!("component {} of `{s}`, {}, is outside 0 to 1 (a linear R,G,B colour)", i + 1, v[i]));
+    }
+    Ok(v)
+}
+
+/// `count` comma-separated finite numbers; a message names the component at fault (counted from 1).
 fn parse_numbers(s: &str, count: usize) -> Result<Vec<f64>, String> {
-    let v: Vec<f64> = s
-        .split(',')
-        .map(|p| p.trim().parse::<f64>().ok().filter(|x| x.is_finite()))
-        .collect::<Option<_>>()
-        .ok_or_else(|| format!("`{s}` is not {count} comma-separated numbers"))?;
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    let mut v = Vec::with_capacity(parts.len());
+    for (i, p) in parts.iter().enumerate() {
+        match p.parse::<f64>() {
+            Ok(x) => v.push(x),
+            Err(_) => return Err(format!("component {} of `{s}`, `{p}`, is not a number", i + 1)),
+        }
+    }
     if v.len() != count {
         return Err(format!("`{s}` has {} numbers, expected {count} separated by commas", v.len()));
+    }
+    if let Some(i) = v.iter().position(|x| !x.is_finite()) {
+        return Err(format!("component {} of `{s}`, {}, is not a finite number", i + 1, parts[i]));
     }
     Ok(v)
 }
@@ -371,11 +441,35 @@ mod tests {
         assert_eq!(parse_vec3("1, -2.5,3"), Ok([1.0, -2.5, 3.0]));
         assert!(parse_vec3("1,2").unwrap_err().contains("expected 3"));
         assert!(parse_vec3("1,2,nan").is_err());
+        assert_eq!(parse_vec3("NaN,0,0").unwrap_err(), "component 1 of `NaN,0,0`, NaN, is not a finite number");
+        assert_eq!(
+            parse_light("0,0,0,1e309").unwrap_err(),
+            "component 4 of `0,0,0,1e309`, 1e309, is not a finite number"
+        );
+        assert_eq!(parse_vec3("1,x,3").unwrap_err(), "component 2 of `1,x,3`, `x`, is not a number");
+        assert_eq!(parse_colour("0.5,1,0"), Ok([0.5, 1.0, 0.0]));
+        assert!(parse_colour("2,0,0").unwrap_err().contains("component 1 of `2,0,0`, 2, is outside 0 to 1"));
+        assert!(parse_colour("0,-1,0").unwrap_err().contains("component 2 of `0,-1,0`, -1, is outside 0 to 1"));
         assert_eq!(parse_light("0,1,0,20"), Ok([0.0, 1.0, 0.0, 20.0]));
         assert!(parse_light("0,1,0,-1").unwrap_err().contains("must not be negative"));
         assert_eq!(parse_up("0,0,1"), Ok([0.0, 0.0, 1.0]));
         assert!(parse_up("0,0,0").unwrap_err().contains("zero vector"));
         assert!(parse_up("0,-0,0").is_err());
+    }
+
+    #[test]
+    fn durations_too_large_or_negative_say_so() {
+        assert_eq!(parse(duration(), "30d"), Ok(std::time::Duration::from_secs(30 * 86400)));
+        assert_eq!(parse(duration(), "11574074074d"), Ok(std::time::Duration::from_secs(11_574_074_074 * 86400)));
+        let first = |v: &str| parse(duration(), v).unwrap_err().lines().next().unwrap().to_owned();
+        assert_eq!(
+            first("99999999999999d"),
+            "error: --tiles 99999999999999d is too large: the longest duration is 11574074074d (999999999993600 \
+             seconds, about 31 million years)"
+        );
+        assert_eq!(first("-1d"), "error: --tiles must not be negative, got -1d");
+        assert!(first("1e3").contains("got 1e3: `1e3` is not a duration"), "{}", first("1e3"));
+        assert!(first("-soon").contains("must be a duration"), "{}", first("-soon"));
     }
 
     #[test]

@@ -189,6 +189,26 @@ fn out_of_range_values_are_bad_command_lines_with_one_message() {
             "--threads must be between 1 and 1024, got x",
         ),
         (vec!["gen", "random", "--count", "-3", "-o", s(&out)], "--count must be between 1 and 4294967295, got -3"),
+        // A grid's range is its own, whichever end the value is off.
+        (
+            vec!["gen", "grid", "--count", "0", "-o", s(&out)],
+            "--count must be between 1 and 23170 for a grid (cells per side: 4 layers of 2 × count² triangles, at \
+             most 4294967295), got 0",
+        ),
+        (
+            vec!["gen", "grid", "--count", "many", "-o", s(&out)],
+            "--count must be between 1 and 23170 for a grid (cells per side: 4 layers of 2 × count² triangles, at \
+             most 4294967295), got many",
+        ),
+        (
+            vec!["cache", "prune", "--cache-dir", s(dir.path()), "--max-age", "-1d"],
+            "--max-age must not be negative, got -1d",
+        ),
+        (
+            vec!["cache", "prune", "--cache-dir", s(dir.path()), "--max-age", "99999999999999d"],
+            "--max-age 99999999999999d is too large: the longest duration is 11574074074d (999999999993600 seconds, \
+             about 31 million years)",
+        ),
         // A shard's spelling: a leading `-` is a bad value, not an unknown flag; a count past u32
         // is out of range, not malformed.
         (
@@ -227,6 +247,32 @@ fn out_of_range_values_are_bad_command_lines_with_one_message() {
         r.stderr
     );
     assert_eq!(names_in(dir.path()), ["cube.obj", "cube.vlf"], "something was written");
+}
+
+/// Points, lights and colours name the component at fault: one that is a number but not a
+/// finite one says so; a colour component outside 0 to 1 is out of range, negative ones included
+/// (they used to be taken for flags).
+#[test]
+fn points_lights_and_colours_name_the_component_at_fault() {
+    let dir = tempdir();
+    let field = box_field(dir.path(), "cube", [-1.0; 3], [1.0; 3]);
+    let png = dir.path().join("out.png");
+    let render = ["render", s(&field), "-o", s(&png), "--width", "8"];
+    for (extra, says) in [
+        (
+            ["--light", "0,0,0,1e309"],
+            "'--light <X,Y,Z,I>': component 4 of `0,0,0,1e309`, 1e309, is not a finite number",
+        ),
+        (["--eye", "NaN,0,0"], "'--eye <X,Y,Z>': component 1 of `NaN,0,0`, NaN, is not a finite number"),
+        (["--eye", "1,y,0"], "'--eye <X,Y,Z>': component 2 of `1,y,0`, `y`, is not a number"),
+        (["--background", "-1,0,0"], "'--background <R,G,B>': component 1 of `-1,0,0`, -1, is outside 0 to 1"),
+        (["--background", "2,0,0"], "'--background <R,G,B>': component 1 of `2,0,0`, 2, is outside 0 to 1"),
+    ] {
+        let r = vlf(&[&render[..], &extra].concat()).fails_with(2);
+        let first = r.stderr.lines().next().unwrap_or_default();
+        assert!(first.starts_with("error: invalid value") && first.contains(says), "`{}`:\n{}", r.what, r.stderr);
+    }
+    vlf(&[&render[..], &["--background", "0,0.5,1", "-q"]].concat()).ok();
 }
 
 #[test]

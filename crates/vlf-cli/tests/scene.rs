@@ -117,6 +117,18 @@ fn scene_faults_are_one_error_naming_the_instance_and_the_key() {
     vlf(&["render", s(&field), "-o", "p.png", "--frames", "2"]).fails_with(2);
     vlf(&["render", "--scene", s(&scene), "-o", "p.png", "--move", "1"]).fails_with(2);
     vlf(&["render", "--scene", s(&scene), "-o", "p.png", "--frames", "0"]).fails_with(2);
+    // --spin and --frame-ms mean nothing without --frames either: refused as --move is, not ignored.
+    for extra in [&["--move", "1"][..], &["--spin", "45"], &["--frame-ms", "100"], &["--path", "1,0,0"]] {
+        for source in [&["--scene", s(&scene)][..], &[s(&field)]] {
+            let r = vlf(&[&["render"][..], source, &["-o", "p.png"], extra].concat()).fails_with(2);
+            assert!(
+                r.stderr.contains("required arguments were not provided") && r.stderr.contains("--frames <N>"),
+                "`{}`: {}",
+                r.what,
+                r.stderr
+            );
+        }
+    }
     assert_eq!(names_in(dir.path()), ["bad.json", "cube.obj", "cube.vlf", "r.bin"], "something was written");
 }
 

@@ -6,7 +6,7 @@ use super::stdout_line;
 use crate::args::{GenArgs, SceneKind};
 use crate::distinct::{Writes, check_outputs};
 use crate::limits::check_disk;
-use crate::values::{BadUsage, MAX_TRIANGLES};
+use crate::values::{MAX_TRIANGLES, between};
 use anyhow::{Context, Result};
 use std::io::Write;
 use vlf_bake::atomic::write_atomically;
@@ -31,23 +31,24 @@ struct GenSummary<'a> {
 
 /// `vlf-bake gen`: writes a generated scene as OBJ and prints one summary line.
 pub fn run(a: &GenArgs) -> Result<()> {
+    // The range of --count depends on the scene: checked here, with the message of any range.
+    let count = match a.scene {
+        SceneKind::Grid => between(1, MAX_GRID_CELLS).check(
+            "--count",
+            &a.count,
+            &format!(
+                " for a grid (cells per side: {GRID_LAYERS} layers of 2 × count² triangles, at most {MAX_TRIANGLES})"
+            ),
+        ),
+        SceneKind::Random | SceneKind::Slivers => between(1, MAX_TRIANGLES).check("--count", &a.count, ""),
+    }?;
     let (name, triangles, max_abs) = match a.scene {
-        SceneKind::Random => ("random", a.count, 1.0 + a.size),
-        SceneKind::Slivers => ("slivers", a.count, 1.01),
-        SceneKind::Grid => {
-            if a.count > MAX_GRID_CELLS {
-                return Err(BadUsage(format!(
-                    "--count must be between 1 and {MAX_GRID_CELLS} for a grid (cells per side: {GRID_LAYERS} layers of \
-                     2 × count² triangles, at most {MAX_TRIANGLES}), got {}",
-                    a.count
-                ))
-                .into());
-            }
-            ("grid", 2 * a.count * a.count * GRID_LAYERS as u64, a.count as f64)
-        }
+        SceneKind::Random => ("random", count, 1.0 + a.size),
+        SceneKind::Slivers => ("slivers", count, 1.01),
+        SceneKind::Grid => ("grid", 2 * count * count * GRID_LAYERS as u64, count as f64),
     };
-    let bound = generate::obj_bytes_at_most(name, triangles, max_abs);
     check_outputs(&[], &[("-o/--output", &a.output)], Writes::Through)?;
+    let bound = generate::obj_bytes_at_most(name, triangles, max_abs);
     check_disk(&a.output, bound, true, &format!("an OBJ of {triangles} {name} triangles"))?;
     let bytes = write_atomically(&a.output, |w| {
         match a.scene {
@@ -59,7 +60,7 @@ pub fn run(a: &GenArgs) -> Result<()> {
                 generate::write_obj_iter(w, name, triangles, generate::slivers_iter(triangles, a.seed))?
             }
             SceneKind::Grid => {
-                let tris = generate::grid_iter(a.count as u32, GRID_LAYERS, 1.0);
+                let tris = generate::grid_iter(count as u32, GRID_LAYERS, 1.0);
                 generate::write_obj_iter(w, name, triangles, tris)?
             }
         }
