@@ -87,19 +87,25 @@ pub fn check_outputs(inputs: &[(&str, &Path)], outputs: &[(&str, &Path)], writes
 }
 
 /// The first half of [`check_outputs`].
-fn check_distinct(inputs: &[(&str, &Path)], outputs: &[(&str, &Path)]) -> Result<(), BadUsage> {
-    let named = |list: &[(&str, &Path)]| -> Vec<(String, String, Option<Identity>)> {
-        list.iter().map(|(flag, p)| (flag.to_string(), p.display().to_string(), identity(p))).collect()
+fn check_distinct(inputs: &[(&str, &Path)], raw_outputs: &[(&str, &Path)]) -> Result<(), BadUsage> {
+    // A flag is named with its path (`--rays r.bin`); an argument by its path alone (`t.obj`).
+    let named = |list: &[(&str, &Path)]| -> Vec<(String, Option<Identity>)> {
+        list.iter()
+            .map(|(flag, p)| {
+                let name =
+                    if flag.starts_with('-') { format!("{flag} {}", p.display()) } else { p.display().to_string() };
+                (name, identity(p))
+            })
+            .collect()
     };
-    let (inputs, outputs) = (named(inputs), named(outputs));
-    for (k, (flag, path, id)) in outputs.iter().enumerate() {
+    let (inputs, outputs) = (named(inputs), named(raw_outputs));
+    for (k, ((name, id), (flag, _))) in outputs.iter().zip(raw_outputs).enumerate() {
         let Some(id) = id else { continue };
         let earlier = inputs.iter().map(|i| (i, "the input")).chain(outputs[..k].iter().map(|o| (o, "the output")));
-        for ((other_flag, other_path, other_id), role) in earlier {
+        for ((other, other_id), role) in earlier {
             if other_id.as_ref() == Some(id) {
                 return Err(BadUsage(format!(
-                    "{flag} {path} is the same file as {role} {other_flag} {other_path}: writing it would destroy \
-                     {role}; give {flag} another path"
+                    "{name} is the same file as {role} {other}: writing it would destroy {role}; give {flag} another path"
                 )));
             }
         }

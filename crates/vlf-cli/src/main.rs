@@ -24,7 +24,7 @@ mod values;
 
 use anyhow::Result;
 use args::{Cli, Command};
-use clap::{CommandFactory, Parser};
+use clap::{CommandFactory, FromArgMatches};
 use std::process::ExitCode;
 use values::BadUsage;
 
@@ -33,7 +33,15 @@ fn main() -> ExitCode {
         eprintln!("error: cannot install the handler of SIGINT, SIGTERM, SIGHUP and SIGXFSZ: {e}");
         return ExitCode::FAILURE;
     }
-    let cli = Cli::parse();
+    let matches = Cli::command().get_matches();
+    let cli = Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.format(&mut Cli::command()).exit());
+    // `bake`, or `cache prune`: a bad command line found later is printed with its usage.
+    let mut path = Vec::new();
+    let mut m = &matches;
+    while let Some((name, sub)) = m.subcommand() {
+        path.push(name.to_owned());
+        m = sub;
+    }
     let json = cli.command.json();
     let result = run(cli);
     // A signal or a failed worker is being handled: that thread ends the process.
@@ -44,7 +52,9 @@ fn main() -> ExitCode {
         Err(e) => match e.downcast_ref::<BadUsage>() {
             Some(BadUsage(message)) => {
                 let error = clap::Error::raw(clap::error::ErrorKind::ValueValidation, message);
-                let _ = error.format(&mut Cli::command()).print();
+                let mut cli = Cli::command();
+                cli.build();
+                let _ = error.format(subcommand(&mut cli, &path)).print();
                 ExitCode::from(2)
             }
             None => {
@@ -57,6 +67,15 @@ fn main() -> ExitCode {
             }
         },
     }
+}
+
+/// The subcommand of `cmd` at `path` (`["cache", "prune"]`), or `cmd` itself for an empty path.
+fn subcommand<'a>(cmd: &'a mut clap::Command, path: &[String]) -> &'a mut clap::Command {
+    let Some((name, rest)) = path.split_first() else { return cmd };
+    if cmd.find_subcommand(name).is_none() {
+        return cmd;
+    }
+    subcommand(cmd.find_subcommand_mut(name).expect("found above"), rest)
 }
 
 fn is_broken_pipe(e: &anyhow::Error) -> bool {

@@ -404,16 +404,16 @@ fn an_output_that_is_an_input_or_another_output_is_a_bad_command_line() {
     let same =
         |a: &str, b: &str, role: &str| format!("{a} is the same file as the {role} {b}: writing it would destroy");
     let mut cases: Vec<(Vec<&str>, String)> = vec![
-        (vec!["bake", "t2.obj", "-o", "t2.obj"], same("-o/--output t2.obj", "INPUT t2.obj", "input")),
+        (vec!["bake", "t2.obj", "-o", "t2.obj"], same("-o/--output t2.obj", "t2.obj", "input")),
         (
             vec!["trace", "bunny.vlf", "--rays", "r.bin", "-o", "./bunny.vlf"],
-            same("-o/--output ./bunny.vlf", "FIELD bunny.vlf", "input"),
+            same("-o/--output ./bunny.vlf", "bunny.vlf", "input"),
         ),
         (
             vec!["trace", "bunny.vlf", "--rays", "r.bin", "-o", "r.bin"],
             same("-o/--output r.bin", "--rays r.bin", "input"),
         ),
-        (vec!["merge", "s0.vlfs", "s1.vlfs", "-o", "s0.vlfs"], same("-o/--output s0.vlfs", "SHARD s0.vlfs", "input")),
+        (vec!["merge", "s0.vlfs", "s1.vlfs", "-o", "s0.vlfs"], same("-o/--output s0.vlfs", "s0.vlfs", "input")),
         (
             vec!["bake", "t2.obj", "-o", "f.vlf", "--report", "f.vlf"],
             same("--report f.vlf", "-o/--output f.vlf", "output"),
@@ -422,16 +422,18 @@ fn an_output_that_is_an_input_or_another_output_is_a_bad_command_line() {
             vec!["render", "bunny.vlf", "-o", "same.png", "--work-image", "sub/../same.png"],
             same("--work-image sub/../same.png", "-o/--output same.png", "output"),
         ),
-        (vec!["pack", "bunny.vlf", "-o", "bunny.vlf"], same("-o/--output bunny.vlf", "FIELD bunny.vlf", "input")),
-        (vec!["unpack", "p.vlf", "-o", "sub/../p.vlf"], same("-o/--output sub/../p.vlf", "PACKED p.vlf", "input")),
-        (vec!["rays", "bunny.vlf", "-o", "bunny.vlf"], same("-o/--output bunny.vlf", "FIELD bunny.vlf", "input")),
+        (vec!["pack", "bunny.vlf", "-o", "bunny.vlf"], same("-o/--output bunny.vlf", "bunny.vlf", "input")),
+        (vec!["unpack", "p.vlf", "-o", "sub/../p.vlf"], same("-o/--output sub/../p.vlf", "p.vlf", "input")),
+        (vec!["rays", "bunny.vlf", "-o", "bunny.vlf"], same("-o/--output bunny.vlf", "bunny.vlf", "input")),
     ];
     #[cfg(unix)]
-    cases.push((vec!["pack", "bunny.vlf", "-o", "link.vlf"], same("-o/--output link.vlf", "FIELD bunny.vlf", "input")));
+    cases.push((vec!["pack", "bunny.vlf", "-o", "link.vlf"], same("-o/--output link.vlf", "bunny.vlf", "input")));
     for (args, says) in cases {
         let r = in_dir(&args).fails_with(2);
         let first = r.stderr.lines().next().unwrap_or_default();
         assert!(first.starts_with(&format!("error: {says}")), "`{}`:\n{}", r.what, r.stderr);
+        // The usage of the subcommand, not of `vlf-bake <COMMAND>`.
+        assert!(r.stderr.contains(&format!("Usage: vlf-bake {} ", args[0])), "`{}`:\n{}", r.what, r.stderr);
         let after: Vec<(String, Vec<u8>)> = names_in(d)
             .into_iter()
             .filter(|n| n != "sub")
@@ -473,35 +475,6 @@ fn an_output_that_cannot_be_written_fails_before_the_work_and_writes_nothing() {
     }
 }
 
-#[test]
-fn a_failure_with_json_prints_its_error_as_one_json_object() {
-    let dir = tempdir();
-    let field = box_field(dir.path(), "box", [-1.0; 3], [1.0; 3]);
-    // A byte flipped in the middle of the file: opening checks the header, --verify the hashes.
-    let bad = dir.path().join("bad.vlf");
-    let mut bytes = std::fs::read(&field).unwrap();
-    let mid = bytes.len() / 2;
-    bytes[mid] ^= 0x40;
-    std::fs::write(&bad, &bytes).unwrap();
-    let missing = dir.path().join("missing.rays");
-    let out = dir.path().join("hits.bin");
-    for args in [
-        vec!["dump", s(&bad), "--verify", "--json"],
-        vec!["dump", "no-such-field.vlf", "--json"],
-        vec!["trace", s(&field), "--rays", s(&missing), "-o", s(&out), "--json"],
-        vec!["cache", "list", "--cache-dir", s(&field), "--json"],
-    ] {
-        let r = vlf(&args);
-        let line = r.one_error_line().to_owned();
-        let j = r.json();
-        assert_eq!(j, serde_json::json!({ "error": &line["error: ".len()..] }), "`{}`", r.what);
-    }
-    // Without --json, standard output stays empty; a bad command line is not JSON either.
-    let r = vlf(&["dump", s(&bad), "--verify", "-q"]);
-    r.fails_saying(&["failed verification"]);
-    assert_eq!(r.stdout, "");
-    bad_usage(vlf(&["dump", s(&field), "--json", "--no-such-flag"]), "unexpected argument '--no-such-flag' found");
-}
 /// An output that must be a file (a field, a shard, a report) but is an existing device is
 /// refused before any work, naming its flag: `bake -o /dev/null` used to import and choose the
 /// parameters first (12 s on a large mesh), and `--report /dev/full` to bake and commit the field
@@ -557,3 +530,32 @@ fn directories_that_are_missing_or_files_say_which() {
     assert_eq!(names_in(d), ["file.txt"]);
 }
 
+#[test]
+fn a_failure_with_json_prints_its_error_as_one_json_object() {
+    let dir = tempdir();
+    let field = box_field(dir.path(), "box", [-1.0; 3], [1.0; 3]);
+    // A byte flipped in the middle of the file: opening checks the header, --verify the hashes.
+    let bad = dir.path().join("bad.vlf");
+    let mut bytes = std::fs::read(&field).unwrap();
+    let mid = bytes.len() / 2;
+    bytes[mid] ^= 0x40;
+    std::fs::write(&bad, &bytes).unwrap();
+    let missing = dir.path().join("missing.rays");
+    let out = dir.path().join("hits.bin");
+    for args in [
+        vec!["dump", s(&bad), "--verify", "--json"],
+        vec!["dump", "no-such-field.vlf", "--json"],
+        vec!["trace", s(&field), "--rays", s(&missing), "-o", s(&out), "--json"],
+        vec!["cache", "list", "--cache-dir", s(&field), "--json"],
+    ] {
+        let r = vlf(&args);
+        let line = r.one_error_line().to_owned();
+        let j = r.json();
+        assert_eq!(j, serde_json::json!({ "error": &line["error: ".len()..] }), "`{}`", r.what);
+    }
+    // Without --json, standard output stays empty; a bad command line is not JSON either.
+    let r = vlf(&["dump", s(&bad), "--verify", "-q"]);
+    r.fails_saying(&["failed verification"]);
+    assert_eq!(r.stdout, "");
+    bad_usage(vlf(&["dump", s(&field), "--json", "--no-such-flag"]), "unexpected argument '--no-such-flag' found");
+}

@@ -14,8 +14,13 @@ pub fn run(a: &CacheArgs) -> Result<()> {
     let Some(dir) = a.cache_dir.clone().or(env) else {
         return Err(BadUsage(format!("no cache directory: pass --cache-dir DIR or set {CACHE_DIR_ENV}")).into());
     };
-    if !dir.is_dir() {
-        bail!("{} is not a directory", dir.display());
+    match std::fs::metadata(&dir) {
+        Ok(meta) if meta.is_dir() => {}
+        Ok(_) => bail!("the cache directory {} is not a directory", dir.display()),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            bail!("the cache directory {} does not exist", dir.display())
+        }
+        Err(e) => bail!("cannot read the cache directory {}: {e}", dir.display()),
     }
     let cache = Cache::open(&dir)?;
     match &a.action {

@@ -37,6 +37,12 @@ pub fn run(a: &DemoArgs) -> Result<()> {
     if let Some(missing) = inputs.iter().find(|i| !i.exists()) {
         bail!("demo mesh {} not found; pass --input MESH", missing.display());
     }
+    if std::fs::metadata(&a.output_dir).is_ok_and(|m| !m.is_dir()) {
+        bail!(
+            "--output-dir {} exists and is not a directory: give a directory, or a path to create one",
+            a.output_dir.display()
+        );
+    }
     let created = first_missing(&a.output_dir);
     std::fs::create_dir_all(&a.output_dir).with_context(|| format!("cannot create {}", a.output_dir.display()))?;
     let result = steps(a, inputs);
