@@ -177,9 +177,16 @@ fn thread_counts_are_refused_above_1024_and_reduced_to_the_cores() {
         vlf(&["rays", s(&reference), "--width", "8", "--height", "8", "-q", "-o", s(&rays)]).ok();
         let hits = dir.path().join("hits.bin");
         let args = ["trace", s(&reference), "--rays", s(&rays), "-o", s(&hits), "--json"];
-        let r = run(command().env("RAYON_NUM_THREADS", "100000").args(args)).ok();
-        assert!(r.stderr.starts_with("warning: RAYON_NUM_THREADS=100000 is more than the "), "{}", r.stderr);
+        let r = run(command().env("RAYON_NUM_THREADS", "1024").args(args)).ok();
+        assert!(r.stderr.starts_with("warning: RAYON_NUM_THREADS=1024 is more than the "), "{}", r.stderr);
         assert_eq!(r.json()["threads"], cores);
+    }
+    // ...and the same range: what rayon would silently ignore is a bad command line.
+    for bad in ["abc", "-1", "0", "100000"] {
+        let r = run(command().env("RAYON_NUM_THREADS", bad).args(["bake", s(&bunny), "-o", s(&out)])).fails_with(2);
+        let first = r.stderr.lines().next().unwrap_or_default();
+        assert_eq!(first, format!("error: RAYON_NUM_THREADS must be between 1 and 1024, got {bad}"), "{}", r.stderr);
+        assert!(r.stderr.contains("Usage: vlf-bake bake "), "{}", r.stderr);
     }
 }
 
