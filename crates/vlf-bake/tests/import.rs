@@ -1049,3 +1049,55 @@ fn a_malformed_mtl_statement_is_ignored_with_a_warning_naming_its_line() {
     assert_rgb(m.transmission, [0.125, 0.25, 0.25]);
     assert!(scene.report.warnings.iter().any(|w| w.contains("texture")), "{:?}", scene.report.warnings);
 }
+
+#[test]
+fn a_node_transform_beyond_f32_is_blamed_on_the_node() {
+    let dir = tempfile::tempdir().unwrap();
+    type Edit = fn(&mut Value);
+    let cases: &[(Edit, &str)] = &[
+        (
+            |d| d["nodes"][0]["scale"] = json!([1e39, 1e39, 1e39]),
+            "node 0: its scale does not fit in f32: element 0 (1e39)",
+        ),
+        (
+            |d| d["nodes"][0]["translation"] = json!([0, -1e39, 0]),
+            "node 0: its translation does not fit in f32: element 1 (-1e39)",
+        ),
+        (
+            |d| d["nodes"][0]["rotation"] = json!([0, 0, 1e40, 1]),
+            "node 0: its rotation does not fit in f32: element 2 (1e40)",
+        ),
+        (
+            |d| {
+                let mut m = vec![json!(0); 16];
+                m[0] = json!(1);
+                m[5] = json!(1);
+                m[10] = json!(1);
+                m[12] = json!(1e39);
+                m[15] = json!(1);
+                d["nodes"][0]["matrix"] = Value::Array(m);
+            },
+            "node 0: its matrix does not fit in f32: element 12 (1e39)",
+        ),
+        (
+            // Nine scales of 1e38, each within f32: 1e342 together, past f64.
+            |d| {
+                let chain: Vec<Value> = (1..=9).map(|c| json!({"children": [c], "scale": [1e38, 1, 1]})).collect();
+                d["nodes"] = Value::Array(chain);
+                d["nodes"][8] = json!({"mesh": 0, "scale": [1e38, 1, 1]});
+            },
+            "node 8: its transform composed with its ancestors' overflows",
+        ),
+    ];
+    for (edit, expected) in cases {
+        let mut doc = tiny_gltf();
+        edit(&mut doc);
+        let e = import_json(dir.path(), "overflow.gltf", &doc).unwrap_err();
+        assert!(matches!(&e, ImportError::Gltf { message, .. } if message.starts_with(expected)), "{expected}: {e}");
+    }
+    // A scale within f32 that makes a vertex too large: the vertex is blamed, as before.
+    let mut doc = tiny_gltf();
+    doc["nodes"][0]["scale"] = json!([1e20, 1, 1]);
+    let e = import_json(dir.path(), "large.gltf", &doc).unwrap_err();
+    assert!(matches!(e, ImportError::TooLarge { vertex: 1, .. }), "{e}");
+}

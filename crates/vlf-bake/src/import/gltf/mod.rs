@@ -35,7 +35,7 @@ use records::{camera_record, light_record};
 use serde_json::Value;
 use std::borrow::Cow;
 use std::path::{Path, PathBuf};
-use transform::{IDENTITY, Mat4, local_matrix, mul, transform_point};
+use transform::{IDENTITY, Mat4, local_matrix, mul, non_finite_part, transform_point};
 use vlf_format::{NO_INDEX, source_kind};
 
 /// Whether a required extension leaves geometry alone (materials, textures, lights, metadata), so
@@ -143,7 +143,21 @@ pub(super) fn import(
                 "node {index} is reached twice: nodes must form trees (a cycle, or a node with two parents)"
             )));
         }
-        let world = mul(&parent, &local_matrix(node.transform()));
+        let transform = node.transform();
+        if let Some((property, k)) = non_finite_part(&transform) {
+            let raw_value = raw.get("nodes").and_then(|n| n.get(index)).and_then(|n| n.get(property));
+            let shown =
+                raw_value.and_then(|v| v.get(k)).and_then(Value::as_f64).map_or("inf".into(), |v| format!("{v:e}"));
+            return Err(ctx.err(format!(
+                "node {index}: its {property} does not fit in f32: element {k} ({shown}) is beyond ±3.4e38"
+            )));
+        }
+        let world = mul(&parent, &local_matrix(transform));
+        if !world.as_flattened().iter().all(|c| c.is_finite()) {
+            return Err(ctx.err(format!(
+                "node {index}: its transform composed with its ancestors' overflows (not finite in f64)"
+            )));
+        }
         visits.push((index, world));
         let children: Vec<usize> = node.children().map(|c| c.index()).collect();
         stack.extend(children.into_iter().rev().map(|c| (c, world)));

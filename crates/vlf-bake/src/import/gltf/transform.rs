@@ -52,3 +52,18 @@ pub(super) fn transform_point(m: &Mat4, p: [f32; 3]) -> [f64; 3] {
     }
     std::array::from_fn(|row| m[0][row] * x + m[1][row] * y + m[2][row] * z + m[3][row])
 }
+
+/// The part of a node's transform that is not finite, as (its glTF property, the element): a
+/// number beyond the ±3.4e38 of f32 (`1e39`, say) is read as infinite, and would turn the node's
+/// vertices into NaN, blamed on them instead of on the node.
+pub(super) fn non_finite_part(transform: &gl::scene::Transform) -> Option<(&'static str, usize)> {
+    let first = |v: &[f32]| v.iter().position(|c| !c.is_finite());
+    match transform {
+        gl::scene::Transform::Matrix { matrix } => first(matrix.as_flattened()).map(|k| ("matrix", k)),
+        gl::scene::Transform::Decomposed { translation, rotation, scale } => {
+            [("translation", &translation[..]), ("rotation", &rotation[..]), ("scale", &scale[..])]
+                .into_iter()
+                .find_map(|(name, v)| first(v).map(|k| (name, k)))
+        }
+    }
+}
