@@ -1101,3 +1101,143 @@ fn a_node_transform_beyond_f32_is_blamed_on_the_node() {
     let e = import_json(dir.path(), "large.gltf", &doc).unwrap_err();
     assert!(matches!(e, ImportError::TooLarge { vertex: 1, .. }), "{e}");
 }
+
+/// The bytes of a GLB: the header, then each (type, data) chunk with its header.
+fn glb(chunks: &[(&[u8; 4], &[u8])]) -> Vec<u8> {
+    let mut body = Vec::new();
+    for (ty, data) in chunks {
+        body.extend_from_slice(&(data.len() as u32).to_le_bytes());
+        body.extend_from_slice(*ty);
+        body.extend_from_slice(data);
+    }
+    let mut bytes = b"glTF\x02\0\0\0".to_vec();
+    bytes.extend_from_slice(&(12 + body.len() as u32).to_le_bytes());
+    bytes.extend(body);
+    bytes
+}
+
+/// The one-triangle document of [`tiny_gltf`] as a GLB: its JSON (padded with spaces) and its
+/// buffer as the BIN chunk (padded with zeros).
+fn tiny_glb() -> Vec<u8> {
+    let mut doc = tiny_gltf();
+    let uri = doc["buffers"][0]["uri"].as_str().unwrap().to_string();
+    let encoded = uri.split_once(',').unwrap().1;
+    doc["buffers"][0].as_object_mut().unwrap().remove("uri");
+    let mut bin = base64_decode(encoded);
+    bin.resize(bin.len().next_multiple_of(4), 0);
+    let mut json = serde_json::to_vec(&doc).unwrap();
+    json.resize(json.len().next_multiple_of(4), b' ');
+    glb(&[(b"JSON", &json), (b"BIN\0", &bin)])
+}
+
+fn base64_decode(text: &str) -> Vec<u8> {
+    const A: &[u8] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    let sextets: Vec<u32> =
+        text.bytes().filter(|&b| b != b'=').map(|b| A.iter().position(|&a| a == b).unwrap() as u32).collect();
+    let mut out = Vec::new();
+    for group in sextets.chunks(4) {
+        let n = group.iter().enumerate().fold(0u32, |n, (k, &s)| n | s << (18 - 6 * k));
+        out.extend_from_slice(&n.to_be_bytes()[1..group.len()]);
+    }
+    out
+}
+
+#[test]
+fn damaged_glb_containers_are_refused_naming_the_chunk_and_its_offset() {
+    let dir = tempfile::tempdir().unwrap();
+    let good = tiny_glb();
+    let (json, bin) = glb_chunks(&good);
+    assert_eq!((json["asset"]["version"].as_str(), bin.len()), (Some("2.0"), 44));
+    let path = dir.path().join("tiny.glb");
+    std::fs::write(&path, &good).unwrap();
+    assert_eq!(import_paths(&[&path]).unwrap().len(), 1);
+
+    let json_len = u32::from_le_bytes(good[12..16].try_into().unwrap()) as usize;
+    let bin_at = 20 + json_len;
+    let set = |bytes: &mut Vec<u8>, at: usize, value: u32| bytes[at..at + 4].copy_from_slice(&value.to_le_bytes());
+    let total = good.len();
+    type Edit = Box<dyn Fn(&mut Vec<u8>)>;
+    let cases: Vec<(Edit, String)> = vec![
+        (Box::new(move |b| set(b, 12, 0)), "chunk 0 at byte 12 (JSON) is empty".into()),
+        (
+            Box::new(move |b| set(b, 12, json_len as u32 + 1)),
+            format!("chunk 0 at byte 12 (JSON): its length {} is not a multiple of 4", json_len + 1),
+        ),
+        (
+            Box::new(move |b| set(b, 12, json_len as u32 - 1)),
+            format!("chunk 0 at byte 12 (JSON): its length {} is not a multiple of 4", json_len - 1),
+        ),
+        (
+            Box::new(move |b| set(b, 12, 1 << 20)),
+            format!("chunk 0 at byte 12 (JSON): its length 1048576 runs past the end of the file ({total} bytes)"),
+        ),
+        (
+            Box::new(|b| b[19] = b'M'),
+            "chunk 0 at byte 12 has type 0x4D4F534A (\"JSOM\"), but the first chunk must be JSON (0x4E4F534A)".into(),
+        ),
+        (
+            Box::new(move |b| set(b, bin_at, 48)),
+            format!(
+                "chunk 1 at byte {bin_at} (BIN): its length 48 runs past the end of the file ({total} bytes) by 4 bytes"
+            ),
+        ),
+        (
+            Box::new(move |b| b[bin_at + 4..bin_at + 8].copy_from_slice(b"JSON")),
+            format!("chunk 1 at byte {bin_at} is a second JSON chunk"),
+        ),
+        (
+            Box::new(move |b| b[bin_at + 4..bin_at + 8].copy_from_slice(b"BIM\0")),
+            format!(
+                "buffer 0 is the GLB binary chunk, but the file has none (chunk 1 at byte {bin_at}, of type 0x004D4942"
+            ),
+        ),
+        (
+            Box::new(move |b| set(b, 8, 12)),
+            format!("its header gives its length as 12 bytes, but the file has {total} ({} bytes after", total - 12),
+        ),
+        (
+            Box::new(move |b| b.extend_from_slice(&[0; 4])),
+            format!("its header gives its length as {total} bytes, but the file has {}", total + 4),
+        ),
+        (
+            Box::new(move |b| {
+                b.extend_from_slice(&[0; 4]);
+                set(b, 8, total as u32 + 4);
+            }),
+            format!("chunk 2 at byte {total}: only 4 bytes are left, too few for its 8-byte chunk header"),
+        ),
+        (
+            Box::new(move |b| {
+                b.extend_from_slice(&[8, 0, 0, 0, b'B', b'I', b'N', 0, 1, 2, 3, 4, 5, 6, 7, 8]);
+                set(b, 8, total as u32 + 16);
+            }),
+            format!("chunk 2 at byte {total} is a BIN chunk, but only chunk 1 (the second) may be BIN"),
+        ),
+        (
+            Box::new(move |b| {
+                b.truncate(12);
+                set(b, 8, 12);
+            }),
+            "it ends after its 12-byte header, with no JSON chunk (chunk 0)".into(),
+        ),
+    ];
+    for (edit, expected) in cases {
+        let mut bytes = good.clone();
+        edit(&mut bytes);
+        std::fs::write(&path, &bytes).unwrap();
+        let e = import_paths(&[&path]).unwrap_err();
+        assert!(matches!(&e, ImportError::Gltf { message, .. } if message.contains(&expected)), "{expected}\n{e}");
+    }
+
+    // A chunk of a type glTF does not define, after the others: ignored (as the format
+    // requires), with a warning.
+    let mut bytes = good.clone();
+    bytes.extend_from_slice(&[4, 0, 0, 0, b'X', b'T', b'R', b'A', 1, 2, 3, 4]);
+    set(&mut bytes, 8, total as u32 + 12);
+    std::fs::write(&path, &bytes).unwrap();
+    let scene = import_paths(&[&path]).unwrap();
+    assert_eq!(scene.len(), 1);
+    let expected =
+        format!("GLB chunk 2 at byte {total}, of type 0x41525458 (\"XTRA\") is not a chunk type glTF 2.0 defines");
+    assert!(scene.report.warnings.iter().any(|w| w.contains(&expected)), "{:?}", scene.report.warnings);
+}

@@ -22,6 +22,7 @@
 
 mod accessor;
 mod expand;
+mod glb;
 mod records;
 mod transform;
 
@@ -33,7 +34,6 @@ use gl::json::validation::Validate;
 use gl::mesh::Mode;
 use records::{camera_record, light_record};
 use serde_json::Value;
-use std::borrow::Cow;
 use std::path::{Path, PathBuf};
 use transform::{IDENTITY, Mat4, local_matrix, mul, non_finite_part, transform_point};
 use vlf_format::{NO_INDEX, source_kind};
@@ -77,21 +77,28 @@ pub(super) fn import(
     read_file: &ReadFile,
 ) -> Result<(), ImportError> {
     let ctx = Ctx { path, input, read_file };
-    check_container(&ctx, bytes)?;
+    check_start(path, bytes, bytes.len() as u64)?;
+    // The JSON and binary chunks of a GLB, its container checked whole (`glb::check`).
+    let (json, bin, ignored) = if bytes.starts_with(b"glTF") {
+        let chunks = glb::check(bytes, bytes.len() as u64).map_err(|e| ctx.err(e))?;
+        let chunks = chunks.ok_or_else(|| ctx.err("not a valid GLB container".to_string()))?;
+        (chunks.json, chunks.bin, chunks.ignored)
+    } else {
+        (bytes, None, None)
+    };
+    if let Some(chunk) = &ignored {
+        ctx.warn(builder, format!("GLB {chunk} is not a chunk type glTF 2.0 defines; ignored"));
+    }
 
     // The raw JSON, for what the typed document drops (extensions on primitives and buffer views).
-    let json: Cow<[u8]> = if bytes.starts_with(b"glTF") {
-        gl::Glb::from_slice(bytes).map_err(|e| ctx.err(format!("not a valid GLB container: {e}")))?.json
-    } else {
-        Cow::Borrowed(bytes)
-    };
-    let raw: Value = serde_json::from_slice(&json).map_err(|e| ctx.err(format!("the JSON does not parse: {e}")))?;
+    let raw: Value = serde_json::from_slice(json).map_err(|e| ctx.err(format!("the JSON does not parse: {e}")))?;
     check_extensions(&ctx, &raw)?;
 
-    let gl::Gltf { document, blob } =
-        gl::Gltf::from_slice_without_validation(bytes).map_err(|e| ctx.err(format!("{e}")))?;
+    let document = gl::Document::from_json_without_validation(
+        gl::json::Root::from_slice(json).map_err(|e| ctx.err(format!("{e}")))?,
+    );
     validate(&ctx, document.as_json())?;
-    let buffers = load_buffers(&ctx, &document, blob)?;
+    let buffers = load_buffers(&ctx, &document, bin.map(<[u8]>::to_vec), ignored.as_deref())?;
 
     if let Some(nodes) = raw.get("nodes").and_then(Value::as_array) {
         for (i, node) in nodes.iter().enumerate() {
@@ -185,54 +192,36 @@ pub(super) fn import(
     Ok(())
 }
 
-/// Says what is wrong with a file that is neither glTF JSON nor a whole GLB container, before a
-/// parser reports a JSON syntax error or a short read: no `{` and no `glTF` magic (naming what the
-/// bytes look like instead), a GLB version other than 2, a GLB shorter than its header says.
-fn check_container(ctx: &Ctx, bytes: &[u8]) -> Result<(), ImportError> {
-    const GLB_HEADER: usize = 12;
-    if !bytes.starts_with(b"glTF") {
-        let text = bytes.strip_prefix(b"\xEF\xBB\xBF".as_slice()).unwrap_or(bytes);
-        if text.iter().find(|b| !b.is_ascii_whitespace()) == Some(&b'{') {
-            return Ok(());
-        }
-        let looks_like = if super::obj::looks_like_obj(text) {
-            " (it looks like OBJ text: give it the .obj extension)"
-        } else if bytes.starts_with(&vlf_format::MAGIC) {
-            " (it is a VLF field, not a mesh)"
-        } else {
-            ""
-        };
-        let glb = ctx.path.extension().is_some_and(|e| e.eq_ignore_ascii_case("glb"));
-        return Err(ctx.err(if glb {
-            format!("not a GLB file: it does not start with the GLB magic \"glTF\"{looks_like}")
-        } else {
-            format!(
-                "neither glTF JSON nor GLB: the file starts with neither '{{' nor the GLB magic \"glTF\"{looks_like}"
-            )
-        }));
+/// Says what is wrong with the start of a file that should be glTF JSON or a GLB container, from
+/// its first bytes `prefix` (all of them, or the first ones) and its size, so
+/// that a file that is neither is refused before it is read whole, and before a parser reports a
+/// JSON syntax error or a short read: no `{` and no `glTF` magic (naming what the bytes look like
+/// instead), or a damaged GLB container ([`glb::check`], as much of it as `prefix` holds).
+pub(super) fn check_start(path: &Path, prefix: &[u8], size: u64) -> Result<(), ImportError> {
+    let err = |message: String| ImportError::Gltf { path: path.to_path_buf(), message };
+    if prefix.starts_with(b"glTF") {
+        return glb::check(prefix, size).map(drop).map_err(err);
     }
-    let word = |at: usize| bytes.get(at..at + 4).map(|w| u32::from_le_bytes([w[0], w[1], w[2], w[3]]));
-    let (Some(version), Some(length)) = (word(4), word(8)) else {
-        return Err(
-            ctx.err(format!("truncated GLB: {} bytes, shorter than the {GLB_HEADER}-byte GLB header", bytes.len()))
-        );
+    let text = prefix.strip_prefix(b"\xEF\xBB\xBF".as_slice()).unwrap_or(prefix);
+    match text.iter().find(|b| !b.is_ascii_whitespace()) {
+        Some(b'{') => return Ok(()),
+        // Only spaces so far: the whole file tells.
+        None if (prefix.len() as u64) < size => return Ok(()),
+        _ => {}
+    }
+    let looks_like = if super::obj::looks_like_obj(text) {
+        " (it looks like OBJ text: give it the .obj extension)"
+    } else if prefix.starts_with(&vlf_format::MAGIC) {
+        " (it is a VLF field, not a mesh)"
+    } else {
+        ""
     };
-    if version != 2 {
-        return Err(ctx.err(format!("GLB version {version} is not supported (glTF 2.0 files are GLB version 2)")));
-    }
-    // The crate subtracts the header's size from the declared length unchecked.
-    if (length as usize) < GLB_HEADER {
-        return Err(ctx.err(format!(
-            "not a valid GLB container: its header gives its length as {length} bytes, less than the {GLB_HEADER}-byte header"
-        )));
-    }
-    if length as usize > bytes.len() {
-        return Err(ctx.err(format!(
-            "truncated GLB: its header gives its length as {length} bytes, but the file has {}",
-            bytes.len()
-        )));
-    }
-    Ok(())
+    let glb = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("glb"));
+    Err(err(if glb {
+        format!("not a GLB file: it does not start with the GLB magic \"glTF\"{looks_like}")
+    } else {
+        format!("neither glTF JSON nor GLB: the file starts with neither '{{' nor the GLB magic \"glTF\"{looks_like}")
+    }))
 }
 
 /// Refuses extensions that change how geometry is stored: compression on a primitive, and any
@@ -336,15 +325,23 @@ fn validate(ctx: &Ctx, root: &gl::json::Root) -> Result<(), ImportError> {
 }
 
 /// The bytes of every buffer: the GLB binary chunk, a `data:` URI, or a file beside the document.
-fn load_buffers(ctx: &Ctx, document: &gl::Document, mut blob: Option<Vec<u8>>) -> Result<Vec<Vec<u8>>, ImportError> {
+/// `ignored` is the first GLB chunk of a type glTF does not define, if any (named when the binary
+/// chunk is missing: it may be a BIN chunk whose type was damaged).
+fn load_buffers(
+    ctx: &Ctx,
+    document: &gl::Document,
+    mut blob: Option<Vec<u8>>,
+    ignored: Option<&str>,
+) -> Result<Vec<Vec<u8>>, ImportError> {
     let base = ctx.path.parent().unwrap_or(Path::new(""));
     let mut out = Vec::new();
     for buffer in document.buffers() {
         let i = buffer.index();
         let data = match buffer.source() {
-            gl::buffer::Source::Bin => blob
-                .take()
-                .ok_or_else(|| ctx.err(format!("buffer {i} is the GLB binary chunk, but the file has none")))?,
+            gl::buffer::Source::Bin => blob.take().ok_or_else(|| {
+                let ignored = ignored.map(|c| format!(" ({c}, is not BIN, 0x004E4942)")).unwrap_or_default();
+                ctx.err(format!("buffer {i} is the GLB binary chunk, but the file has none{ignored}"))
+            })?,
             source @ gl::buffer::Source::Uri(uri) if uri.starts_with("data:") => {
                 gl::buffer::Data::from_source(source, None)
                     .map_err(|e| ctx.err(format!("buffer {i}: bad data URI: {e}")))?
