@@ -1050,6 +1050,108 @@ fn a_malformed_mtl_statement_is_ignored_with_a_warning_naming_its_line() {
     assert!(scene.report.warnings.iter().any(|w| w.contains("texture")), "{:?}", scene.report.warnings);
 }
 
+// ---------------------------------------------------------------------------------------------
+// Files judged by their first bytes and their size before they are read whole
+
+/// A sparse file of `size` bytes at `dir/name` that starts with `start` (zeros after it).
+fn sparse(dir: &Path, name: &str, start: &[u8], size: u64) -> PathBuf {
+    let path = dir.join(name);
+    std::fs::write(&path, start).unwrap();
+    std::fs::File::options().write(true).open(&path).unwrap().set_len(size).unwrap();
+    path
+}
+
+/// A tebibyte: more than any machine running these tests can read into memory.
+const TIB: u64 = 1 << 40;
+
+#[test]
+fn a_huge_mesh_is_refused_by_its_first_bytes_without_reading_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let message = |path: &Path| import_paths(&[path]).unwrap_err().to_string();
+    let glb = sparse(dir.path(), "zeros.glb", b"", TIB);
+    assert!(
+        message(&glb).ends_with("not a GLB file: it does not start with the GLB magic \"glTF\""),
+        "{}",
+        message(&glb)
+    );
+    let gltf = sparse(dir.path(), "zeros.gltf", b"", TIB);
+    assert!(message(&gltf).contains("neither glTF JSON nor GLB"), "{}", message(&gltf));
+    // JSON's grammar is checked as far as the first bytes go: a NUL byte is no JSON.
+    let gltf = sparse(dir.path(), "brace_then_zeros.gltf", b"{\"asset\": ", TIB);
+    assert!(
+        message(&gltf).ends_with("the JSON does not parse: expected value at line 1 column 11"),
+        "{}",
+        message(&gltf)
+    );
+    let mut start = tiny_glb();
+    start[8..12].copy_from_slice(&(1u32 << 31).to_le_bytes());
+    let json_len = u32::from_le_bytes(start[12..16].try_into().unwrap()) as usize;
+    start.truncate(21);
+    start[12..16].copy_from_slice(&(1u32 << 30).to_le_bytes());
+    let glb = sparse(dir.path(), "json_then_zeros.glb", &start, 1 << 31);
+    assert!(
+        message(&glb).ends_with("the JSON does not parse: key must be a string at line 1 column 2"),
+        "{}",
+        message(&glb)
+    );
+    assert!(json_len > 4);
+    let obj = sparse(dir.path(), "zeros.obj", b"", TIB);
+    assert!(
+        message(&obj).ends_with("not a valid OBJ file: not text (a NUL byte on line 1); is this an OBJ file?"),
+        "{}",
+        message(&obj)
+    );
+    let obj = sparse(dir.path(), "vertex_then_zeros.obj", b"v 0 0 0\nv 1 0 0\n", TIB);
+    assert!(message(&obj).contains("not text (a NUL byte on line 3)"), "{}", message(&obj));
+    // A GLB header cannot give a length past 4 GiB: a file larger is refused by its header.
+    let glb = sparse(dir.path(), "huge.glb", b"glTF\x02\0\0\0\x40\0\0\0", TIB);
+    assert!(
+        message(&glb).contains("gives its length as 64 bytes, but the file has 1099511627776"),
+        "{}",
+        message(&glb)
+    );
+}
+
+#[test]
+fn a_mesh_larger_than_memory_is_refused_naming_its_size_and_the_budget() {
+    let dir = tempfile::tempdir().unwrap();
+    // A start that is JSON as far as the first bytes go (spaces), then zeros.
+    let gltf = sparse(dir.path(), "big.gltf", &[b"{".as_slice(), &[b' '; 70_000]].concat(), TIB);
+    let e = import_paths(&[&gltf]).unwrap_err();
+    let ImportError::Io { path, error } = &e else { panic!("{e:?}") };
+    assert_eq!(path, &gltf);
+    assert_eq!(error.kind(), std::io::ErrorKind::OutOfMemory);
+    let text = e.to_string();
+    assert!(text.contains("big.gltf: it is 1.0 TiB (1099511627776 bytes), more than the "), "{text}");
+    assert!(text.contains(" of memory it may be read into ("), "{text}");
+
+    // An external buffer as large: refused the same way, naming the buffer.
+    sparse(dir.path(), "big.bin", b"", TIB);
+    let mut doc = tiny_gltf();
+    doc["buffers"][0] = json!({"byteLength": TIB, "uri": "big.bin"});
+    let e = import_json(dir.path(), "big_buffer.gltf", &doc).unwrap_err().to_string();
+    assert!(e.contains("buffer 0: cannot read external file \"big.bin\""), "{e}");
+    assert!(e.contains("it is 1.0 TiB (1099511627776 bytes), more than the "), "{e}");
+}
+
+#[test]
+fn a_material_library_that_is_not_text_is_a_warning_read_no_further() {
+    let dir = tempfile::tempdir().unwrap();
+    sparse(dir.path(), "zeros.mtl", b"", TIB);
+    sparse(dir.path(), "half.mtl", b"newmtl a\nKd 1 0 0\n", TIB);
+    for library in ["zeros.mtl", "half.mtl"] {
+        let path = dir.path().join("with_library.obj");
+        std::fs::write(&path, format!("mtllib {library}\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\n")).unwrap();
+        let scene = import_paths(&[&path]).unwrap();
+        assert_eq!(scene.len(), 1);
+        let warnings = &scene.report.warnings;
+        assert!(
+            warnings.iter().any(|w| w.contains(&format!("material library \"{library}\"")) && w.contains("a NUL byte")),
+            "{warnings:?}"
+        );
+    }
+}
+
 #[test]
 fn a_node_transform_beyond_f32_is_blamed_on_the_node() {
     let dir = tempfile::tempdir().unwrap();

@@ -13,7 +13,7 @@ mod obj;
 pub use input::{NotARegularFile, check_regular_file, read_regular_file};
 
 use crate::scene::{ImportError, Scene, SceneBuilder};
-use input::ReadFile;
+use input::{Expect, Fetch, ReadFile, Refused};
 use std::path::Path;
 
 /// Imports every path into one scene, in order (several inputs may be baked into one field).
@@ -38,36 +38,55 @@ pub fn import_paths(paths: &[impl AsRef<Path>]) -> Result<Scene, ImportError> {
 /// Only regular files are read, the mesh and the files it refers to alike ([`read_regular_file`]):
 /// a directory, a pipe or a device is an error saying which, before it is opened. An external
 /// glTF buffer is read up to its declared `byteLength`, however long its file.
+///
+/// No file is read whole before its first bytes are judged and its size is compared with the
+/// memory the process may use ([`crate::memory::budget`]): a mesh whose first bytes are not
+/// what its format starts with (the GLB header and chunks, the `{` of glTF JSON, OBJ text) is
+/// refused from its first 64 KiB, and one larger than the budget is an error naming its size
+/// and the budget. A material library whose first bytes are not text is skipped with a warning,
+/// like a missing one.
 pub fn import_path(builder: &mut SceneBuilder, path: &Path) -> Result<(), ImportError> {
-    let bytes =
-        read_regular_file(path, u64::MAX).map_err(|error| ImportError::Io { path: path.to_path_buf(), error })?;
-    import_with(builder, path, &bytes, &read_regular_file)
+    let bytes = input::read_checked(path, u64::MAX, |prefix, size| check_start(path, prefix, size).map(drop)).map_err(
+        |refused| match refused {
+            Refused::Read(error) => ImportError::Io { path: path.to_path_buf(), error },
+            Refused::Check(e) => e,
+        },
+    )?;
+    import_with(builder, path, &bytes, &input::read_referenced)
 }
 
 /// Adds a mesh held in memory to a builder, exactly as [`import_path`] adds a file: `path` names
 /// it (its extension chooses the format, its final component is the stored input name, and files
 /// the mesh refers to are resolved against its directory), and `read_file` fetches those files
-/// (OBJ material libraries, external glTF buffers). [`import_path`] passes [`std::fs::read`]; a
-/// caller holding everything in memory passes a closure that serves the bytes it has.
+/// (OBJ material libraries, external glTF buffers); a caller holding everything in memory passes a
+/// closure that serves the bytes it has. The first bytes of the mesh and of the files it refers
+/// to are judged as [`import_path`] judges them.
 pub fn import_bytes(
     builder: &mut SceneBuilder,
     path: &Path,
     bytes: &[u8],
     read_file: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
 ) -> Result<(), ImportError> {
-    import_with(builder, path, bytes, &|file, _| read_file(file))
+    import_with(builder, path, bytes, &|file, _, expect| {
+        let bytes = read_file(file)?;
+        expect.check(&bytes[..bytes.len().min(input::PREFIX)], bytes.len() as u64)?;
+        Ok(bytes)
+    })
 }
 
-/// [`import_bytes`] with a `read_file` that is told the most bytes wanted of a file.
-fn import_with(builder: &mut SceneBuilder, path: &Path, bytes: &[u8], read_file: &ReadFile) -> Result<(), ImportError> {
-    if bytes.is_empty() {
-        return Err(ImportError::Empty { path: path.to_path_buf() });
-    }
-    let format = detect_format(path, bytes).ok_or_else(|| ImportError::UnknownFormat { path: path.to_path_buf() })?;
+/// [`import_bytes`] with a `fetch` that is told the most bytes wanted of a file and what its
+/// first bytes must look like.
+fn import_with(builder: &mut SceneBuilder, path: &Path, bytes: &[u8], fetch: &Fetch) -> Result<(), ImportError> {
+    let format = check_start(path, bytes, bytes.len() as u64)?;
     let before = builder.triangle_count();
     let report = builder.report_mut();
     let (dropped, points, lines) = (report.dropped_degenerate, report.skipped_points, report.skipped_lines);
     let input = builder.begin_input(&path.to_string_lossy(), *blake3::hash(bytes).as_bytes());
+    let expect = match format {
+        Format::Obj => Expect::Text,
+        Format::Gltf => Expect::Bytes,
+    };
+    let read_file: &ReadFile = &|file, limit| fetch(file, limit, expect);
     match format {
         Format::Obj => obj::import(builder, input, path, bytes, read_file)?,
         Format::Gltf => gltf::import(builder, input, path, bytes, read_file)?,
@@ -102,6 +121,35 @@ fn import_with(builder: &mut SceneBuilder, path: &Path, bytes: &[u8], read_file:
 enum Format {
     Obj,
     Gltf,
+}
+
+/// The format of the file at `path`, judged by its first bytes `prefix` (all of them, or the first
+/// [`input::PREFIX`]) and its size: an empty file, a file of unknown format, and a file whose
+/// first bytes are not what its format starts with are refused. The same rule before a file is
+/// read whole and after, and for a mesh held in memory.
+fn check_start(path: &Path, prefix: &[u8], size: u64) -> Result<Format, ImportError> {
+    if size == 0 {
+        return Err(ImportError::Empty { path: path.to_path_buf() });
+    }
+    let format = detect_format(path, prefix).ok_or_else(|| ImportError::UnknownFormat { path: path.to_path_buf() })?;
+    match format {
+        Format::Obj => {
+            let err = |message: String| ImportError::Obj { path: path.to_path_buf(), message };
+            if prefix.starts_with(b"glTF") {
+                return Err(err(
+                    "this is a binary glTF (GLB) file, not OBJ text: give it the .glb extension".to_string()
+                ));
+            }
+            if prefix.starts_with(&vlf_format::MAGIC) {
+                return Err(err("this is a VLF field, not a mesh".to_string()));
+            }
+            if let Some(why) = input::not_text(prefix, size) {
+                return Err(err(format!("{why}; is this an OBJ file?")));
+            }
+        }
+        Format::Gltf => gltf::check_start(path, prefix, size)?,
+    }
+    Ok(format)
 }
 
 /// The format of a file: by extension, else by content.

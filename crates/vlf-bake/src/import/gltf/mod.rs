@@ -193,18 +193,23 @@ pub(super) fn import(
 }
 
 /// Says what is wrong with the start of a file that should be glTF JSON or a GLB container, from
-/// its first bytes `prefix` (all of them, or the first ones) and its size, so
+/// its first bytes `prefix` (all of them, or the first [`super::input::PREFIX`]) and its size, so
 /// that a file that is neither is refused before it is read whole, and before a parser reports a
 /// JSON syntax error or a short read: no `{` and no `glTF` magic (naming what the bytes look like
 /// instead), or a damaged GLB container ([`glb::check`], as much of it as `prefix` holds).
 pub(super) fn check_start(path: &Path, prefix: &[u8], size: u64) -> Result<(), ImportError> {
     let err = |message: String| ImportError::Gltf { path: path.to_path_buf(), message };
     if prefix.starts_with(b"glTF") {
-        return glb::check(prefix, size).map(drop).map_err(err);
+        glb::check(prefix, size).map_err(err)?;
+        // The JSON chunk (checked to be chunk 0, inside the file), as far as `prefix` holds it.
+        let Some(length) = prefix.get(12..16) else { return Ok(()) };
+        let end = 20usize.saturating_add(u32::from_le_bytes([length[0], length[1], length[2], length[3]]) as usize);
+        let json = prefix.get(20..end.min(prefix.len())).unwrap_or_default();
+        return check_json_start(json, end <= prefix.len()).map_err(err);
     }
     let text = prefix.strip_prefix(b"\xEF\xBB\xBF".as_slice()).unwrap_or(prefix);
     match text.iter().find(|b| !b.is_ascii_whitespace()) {
-        Some(b'{') => return Ok(()),
+        Some(b'{') => return check_json_start(prefix, prefix.len() as u64 == size).map_err(err),
         // Only spaces so far: the whole file tells.
         None if (prefix.len() as u64) < size => return Ok(()),
         _ => {}
@@ -222,6 +227,17 @@ pub(super) fn check_start(path: &Path, prefix: &[u8], size: u64) -> Result<(), I
     } else {
         format!("neither glTF JSON nor GLB: the file starts with neither '{{' nor the GLB magic \"glTF\"{looks_like}")
     }))
+}
+
+/// `Err` ("the JSON does not parse: ...", as the import would say) if `start`, the first bytes of
+/// a JSON text (all of it when `whole`), breaks JSON's grammar: checked as far as they go, so
+/// that a `{` followed by gigabytes of zero bytes is refused from its first bytes.
+fn check_json_start(start: &[u8], whole: bool) -> Result<(), String> {
+    match serde_json::from_slice::<serde::de::IgnoredAny>(start) {
+        Ok(_) => Ok(()),
+        Err(e) if e.is_eof() && !whole => Ok(()),
+        Err(e) => Err(format!("the JSON does not parse: {e}")),
+    }
 }
 
 /// Refuses extensions that change how geometry is stored: compression on a primitive, and any
