@@ -1343,3 +1343,72 @@ fn damaged_glb_containers_are_refused_naming_the_chunk_and_its_offset() {
         format!("GLB chunk 2 at byte {total}, of type 0x41525458 (\"XTRA\") is not a chunk type glTF 2.0 defines");
     assert!(scene.report.warnings.iter().any(|w| w.contains(&expected)), "{:?}", scene.report.warnings);
 }
+
+/// The peak resident memory of this process (`VmHWM`), in bytes.
+#[cfg(target_os = "linux")]
+fn peak_memory() -> u64 {
+    let status = std::fs::read_to_string("/proc/self/status").unwrap();
+    let line = status.lines().find(|l| l.starts_with("VmHWM:")).unwrap();
+    line["VmHWM:".len()..].trim().trim_end_matches("kB").trim().parse::<u64>().unwrap() * 1024
+}
+
+/// A chain of 300,000 nodes holding one triangle: the import's memory is linear in the nodes and
+/// small a node (about 280 bytes, most of it the `gltf` crate's typed document; it was 1,270
+/// when the whole document was also kept as a `serde_json::Value` and every node's world
+/// transform was kept). Run alone in a child process, so that the peak is this import's.
+#[cfg(target_os = "linux")]
+#[test]
+fn a_deep_node_chain_costs_a_few_hundred_bytes_a_node() {
+    const NAME: &str = "a_deep_node_chain_costs_a_few_hundred_bytes_a_node";
+    if std::env::var_os("VLF_IMPORT_CHAIN_CHILD").is_none() {
+        let out = std::process::Command::new(std::env::current_exe().unwrap())
+            .args(["--exact", NAME, "--nocapture", "--test-threads=1"])
+            .env("VLF_IMPORT_CHAIN_CHILD", "1")
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success() && String::from_utf8_lossy(&out.stdout).contains("1 passed"), "{stderr}");
+        return;
+    }
+    const NODES: usize = 300_000;
+    let dir = tempfile::tempdir().unwrap();
+    let mut doc = tiny_gltf();
+    doc["nodes"] = json!([]);
+    let mut text = serde_json::to_string(&doc).unwrap();
+    let chain: Vec<String> = (1..NODES).map(|c| format!("{{\"children\":[{c}]}}")).collect();
+    let nodes = format!("\"nodes\":[{},{{\"mesh\":0}}]", chain.join(","));
+    text = text.replace("\"nodes\":[]", &nodes);
+    drop(chain);
+    let path = dir.path().join("chain.gltf");
+    std::fs::write(&path, &text).unwrap();
+    drop(text);
+    let before = peak_memory();
+    let scene = import_paths(&[&path]).unwrap();
+    assert_eq!(scene.len(), 1);
+    let per_node = peak_memory().saturating_sub(before) / NODES as u64;
+    eprintln!("{per_node} bytes a node");
+    assert!(per_node < 600, "{per_node} bytes a node");
+}
+
+#[test]
+fn node_extensions_are_read_from_the_raw_json() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut doc = tiny_gltf();
+    doc["extensionsUsed"] = json!(["EXT_mesh_gpu_instancing"]);
+    doc["nodes"][0]["extensions"] = json!({"EXT_mesh_gpu_instancing": {"attributes": {}}});
+    let scene = import_json(dir.path(), "instancing.gltf", &doc).unwrap();
+    assert!(
+        scene
+            .report
+            .warnings
+            .iter()
+            .any(|w| w
+                .ends_with("node 0 uses EXT_mesh_gpu_instancing (not supported): only the node itself is imported")),
+        "{:?}",
+        scene.report.warnings
+    );
+    // Raw parts of the wrong type: the typed document says what is wrong.
+    doc["nodes"][0]["extensions"] = json!(5);
+    let e = import_json(dir.path(), "instancing.gltf", &doc).unwrap_err();
+    assert!(matches!(&e, ImportError::Gltf { message, .. } if message.contains("invalid type: integer `5`")), "{e}");
+}

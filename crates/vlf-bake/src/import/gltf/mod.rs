@@ -23,6 +23,7 @@
 mod accessor;
 mod expand;
 mod glb;
+mod raw;
 mod records;
 mod transform;
 
@@ -32,6 +33,7 @@ use ::gltf as gl;
 use accessor::{Checked, check_primitive};
 use gl::json::validation::Validate;
 use gl::mesh::Mode;
+use raw::{Raw, raw_node};
 use records::{camera_record, light_record};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
@@ -91,23 +93,30 @@ pub(super) fn import(
     }
 
     // The raw JSON, for what the typed document drops (extensions on primitives and buffer views).
-    let raw: Value = serde_json::from_slice(json).map_err(|e| ctx.err(format!("the JSON does not parse: {e}")))?;
-    check_extensions(&ctx, &raw)?;
-
+    // A document whose raw parts do not have the types read (`nodes` not an array, say) is
+    // judged by the typed parse below, which says what is wrong in glTF's terms.
+    let raw: Result<Raw, _> = serde_json::from_slice(json);
+    if let Err(e) = &raw
+        && !e.is_data()
+    {
+        return Err(ctx.err(format!("the JSON does not parse: {e}")));
+    }
+    if let Ok(raw) = &raw {
+        check_extensions(&ctx, raw)?;
+    }
     let document = gl::Document::from_json_without_validation(
         gl::json::Root::from_slice(json).map_err(|e| ctx.err(format!("{e}")))?,
     );
+    let raw = raw.map_err(|e| ctx.err(format!("invalid document: {e}")))?;
     validate(&ctx, document.as_json())?;
     let buffers = load_buffers(&ctx, &document, bin.map(<[u8]>::to_vec), ignored.as_deref())?;
 
-    if let Some(nodes) = raw.get("nodes").and_then(Value::as_array) {
-        for (i, node) in nodes.iter().enumerate() {
-            if has_extension(node, "EXT_mesh_gpu_instancing") {
-                ctx.warn(
-                    builder,
-                    format!("node {i} uses EXT_mesh_gpu_instancing (not supported): only the node itself is imported"),
-                );
-            }
+    for (i, node) in raw.nodes.iter().enumerate() {
+        if node.uses_gpu_instancing() {
+            ctx.warn(
+                builder,
+                format!("node {i} uses EXT_mesh_gpu_instancing (not supported): only the node itself is imported"),
+            );
         }
     }
 
@@ -136,7 +145,7 @@ pub(super) fn import(
 
     import_materials(builder, &ctx, &document);
 
-    // The walk first (the nodes in order, with their world transforms), then the triangles it
+    // The walk first (the nodes that carry something in order, with their world transforms), then the triangles it
     // will make are counted and judged (`expand`), and only then are they made.
     let nodes: Vec<gl::Node> = document.nodes().collect();
     let mut visited = vec![false; nodes.len()];
@@ -152,9 +161,12 @@ pub(super) fn import(
         }
         let transform = node.transform();
         if let Some((property, k)) = non_finite_part(&transform) {
-            let raw_value = raw.get("nodes").and_then(|n| n.get(index)).and_then(|n| n.get(property));
-            let shown =
-                raw_value.and_then(|v| v.get(k)).and_then(Value::as_f64).map_or("inf".into(), |v| format!("{v:e}"));
+            let raw_value = raw_node(json, index).and_then(|n| n.get(property).cloned());
+            let shown = raw_value
+                .as_ref()
+                .and_then(|v| v.get(k))
+                .and_then(Value::as_f64)
+                .map_or("inf".into(), |v| format!("{v:e}"));
             return Err(ctx.err(format!(
                 "node {index}: its {property} does not fit in f32: element {k} ({shown}) is beyond ±3.4e38"
             )));
@@ -165,7 +177,16 @@ pub(super) fn import(
                 "node {index}: its transform composed with its ancestors' overflows (not finite in f64)"
             )));
         }
-        visits.push((index, world));
+        // Only a node that carries a mesh, a camera or a light keeps its world transform (136
+        // bytes): a chain of a million empty nodes keeps one.
+        let carried = document.as_json().nodes.get(index).is_some_and(|n| {
+            n.mesh.is_some()
+                || n.camera.is_some()
+                || n.extensions.as_ref().is_some_and(|e| e.khr_lights_punctual.is_some())
+        });
+        if carried {
+            visits.push((index, world));
+        }
         let children: Vec<usize> = node.children().map(|c| c.index()).collect();
         stack.extend(children.into_iter().rev().map(|c| (c, world)));
     }
@@ -242,7 +263,7 @@ fn check_json_start(start: &[u8], whole: bool) -> Result<(), String> {
 
 /// Refuses extensions that change how geometry is stored: compression on a primitive, and any
 /// required extension that is not known to leave geometry alone.
-fn check_extensions(ctx: &Ctx, raw: &Value) -> Result<(), ImportError> {
+fn check_extensions(ctx: &Ctx, raw: &Raw) -> Result<(), ImportError> {
     let unsupported = |location: String, extension: &str| ImportError::UnsupportedExtension {
         path: ctx.path.to_path_buf(),
         location,
@@ -271,7 +292,7 @@ fn check_extensions(ctx: &Ctx, raw: &Value) -> Result<(), ImportError> {
 }
 
 /// Every mesh primitive of the raw JSON, as (mesh index, primitive index, primitive).
-fn primitives(raw: &Value) -> impl Iterator<Item = (usize, usize, &Value)> {
+fn primitives(raw: &Raw) -> impl Iterator<Item = (usize, usize, &Value)> {
     let meshes = raw.get("meshes").and_then(Value::as_array).map(Vec::as_slice).unwrap_or_default();
     meshes.iter().enumerate().flat_map(|(m, mesh)| {
         let list = mesh.get("primitives").and_then(Value::as_array).map(Vec::as_slice).unwrap_or_default();
@@ -285,7 +306,7 @@ fn primitive_accessors(primitive: &Value) -> impl Iterator<Item = u64> + '_ {
     attributes.into_iter().flat_map(|a| a.values()).chain(primitive.get("indices")).filter_map(Value::as_u64)
 }
 
-fn accessor_has_extension(raw: &Value, accessor: u64, extension: &str) -> bool {
+fn accessor_has_extension(raw: &Raw, accessor: u64, extension: &str) -> bool {
     let element = |array: &str, i: u64| raw.get(array).and_then(Value::as_array).and_then(|a| a.get(i as usize));
     let Some(acc) = element("accessors", accessor) else { return false };
     has_extension(acc, extension)
