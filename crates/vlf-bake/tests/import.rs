@@ -1412,3 +1412,22 @@ fn node_extensions_are_read_from_the_raw_json() {
     let e = import_json(dir.path(), "instancing.gltf", &doc).unwrap_err();
     assert!(matches!(&e, ImportError::Gltf { message, .. } if message.contains("invalid type: integer `5`")), "{e}");
 }
+
+#[test]
+fn a_gltf_whose_first_64_kib_end_inside_a_number_is_read() {
+    // The first bytes are judged as a JSON start: one that ends in "1e", "1.", "-" or "tr" is a
+    // number or a literal cut short, not a syntax error.
+    let dir = tempfile::tempdir().unwrap();
+    let rest = serde_json::to_string(&tiny_gltf()).unwrap();
+    for (cut, tail) in [("1e", "5"), ("1.", "5"), ("-", "1"), ("tr", "ue"), ("12", "34")] {
+        let head = "{\"extras\":{\"pad\":\"";
+        let prefix_len = 64 * 1024 + 1;
+        let pad = "x".repeat(prefix_len - head.len() - "\",\"n\":".len() - cut.len());
+        let text = format!("{head}{pad}\",\"n\":{cut}{tail}}},{}", &rest[1..]);
+        assert_eq!(&text[prefix_len - cut.len()..prefix_len], cut);
+        let path = dir.path().join("cut.gltf");
+        std::fs::write(&path, &text).unwrap();
+        let scene = import_paths(&[&path]).unwrap_or_else(|e| panic!("{cut}: {e}"));
+        assert_eq!(scene.len(), 1);
+    }
+}

@@ -254,6 +254,15 @@ pub(super) fn check_start(path: &Path, prefix: &[u8], size: u64) -> Result<(), I
 /// a JSON text (all of it when `whole`), breaks JSON's grammar: checked as far as they go, so
 /// that a `{` followed by gigabytes of zero bytes is refused from its first bytes.
 fn check_json_start(start: &[u8], whole: bool) -> Result<(), String> {
+    // A start cut inside a number or a literal ("1e", "1.", "-", "tr") would be a syntax error to
+    // the parser: the characters they are made of are dropped from its end (inside a string, it
+    // still ends inside one; anything else, a zero byte say, stays and is judged).
+    let start = if whole {
+        start
+    } else {
+        let token = |b: &u8| b"0123456789+-.eEtruefalsn".contains(b);
+        &start[..start.iter().rposition(|b| !token(b)).map_or(0, |i| i + 1)]
+    };
     match serde_json::from_slice::<serde::de::IgnoredAny>(start) {
         Ok(_) => Ok(()),
         Err(e) if e.is_eof() && !whole => Ok(()),
