@@ -36,13 +36,9 @@ pub(super) fn import(
     bytes: &[u8],
     read_file: &ReadFile,
 ) -> Result<(), ImportError> {
+    // A GLB or a field named `.obj`, and a start that is not text, were refused by their first
+    // bytes (`super::check_start`); what is not UTF-8 further in is refused here.
     let err = |message: String| ImportError::Obj { path: path.to_path_buf(), message };
-    if bytes.starts_with(b"glTF") {
-        return Err(err("this is a binary glTF (GLB) file, not OBJ text: give it the .glb extension".to_string()));
-    }
-    if bytes.starts_with(&vlf_format::MAGIC) {
-        return Err(err("this is a VLF field, not a mesh".to_string()));
-    }
     let text = std::str::from_utf8(bytes).map_err(|e| {
         let line = 1 + bytes[..e.valid_up_to()].iter().filter(|&&b| b == b'\n').count();
         err(format!("not UTF-8 text (invalid byte on line {line}); is this an OBJ file?"))
