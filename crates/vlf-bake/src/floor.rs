@@ -61,11 +61,17 @@ impl EntryFloor {
         if measured == 0 {
             return floor;
         }
-        let lattice = Lattice::new(grid.lattice_n).directions();
+        // The picked directions only: a lattice may have 2²⁵ + 1 of them.
+        let lattice = Lattice::new(grid.lattice_n);
+        let mut picks = (0..measured).map(|i| directions.start as u64 + i * count / measured).peekable();
+        let mut rotations = Vec::with_capacity(measured as usize);
+        for (j, (a, b)) in lattice.point_iter().enumerate() {
+            if picks.next_if_eq(&(j as u64)).is_some() {
+                rotations.push(frame(lattice.direction(a, b)));
+            }
+        }
         let areas = Areas::new(&prep.vertices, &prep.triangles);
-        let picks: Vec<u32> = (0..measured).map(|i| directions.start + (i * count / measured) as u32).collect();
-        let bounds: Vec<u64> =
-            picks.par_iter().map(|&j| areas.entries_at_least(grid, &frame(lattice[j as usize]))).collect();
+        let bounds: Vec<u64> = rotations.par_iter().map(|m| areas.entries_at_least(grid, m)).collect();
         // Each measured direction adds what it makes beyond the one entry per triangle counted.
         floor.total = floor.total.saturating_add(bounds.iter().map(|b| b - triangles).sum());
         floor.largest = bounds.iter().copied().max().unwrap_or(triangles);

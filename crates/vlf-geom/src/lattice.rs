@@ -46,16 +46,18 @@ impl Lattice {
 
     /// The stored lattice points `(a, b)` in direction-index order.
     pub fn points(&self) -> Vec<(i32, i32)> {
-        let n = self.n as i32;
         let mut out = Vec::with_capacity(self.direction_count() as usize);
-        for b in -n..=n {
-            for a in -n..=n {
-                if a.abs() + b.abs() <= n && self.is_canonical(a, b) {
-                    out.push((a, b));
-                }
-            }
-        }
+        out.extend(self.point_iter());
         out
+    }
+
+    /// [`Lattice::points`] one at a time, without holding them (a lattice may have 2²⁵ + 1).
+    pub fn point_iter(&self) -> impl Iterator<Item = (i32, i32)> + '_ {
+        let n = self.n as i32;
+        (-n..=n).flat_map(move |b| {
+            let w = n - b.abs();
+            (-w..=w).map(move |a| (a, b)).filter(|&(a, b)| self.is_canonical(a, b))
+        })
     }
 
     /// The unit direction of lattice point `(a, b)`, in f64 (deterministic: one square root).
