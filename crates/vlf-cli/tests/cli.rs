@@ -1209,3 +1209,31 @@ fn pack_refuses_bad_levels_packed_inputs_and_unpack_raw_ones() {
     assert!(r.one_error_line().contains("not packed"), "{}", r.stderr);
     assert!(!again.exists());
 }
+
+#[test]
+fn a_scene_too_small_for_f32_rays_at_its_distance_is_warned_of() {
+    // One triangle 1 unit across at x = 10⁹, where f32 numbers are 64 apart: it bakes, but an
+    // adversarial sweep found `render` and `rays` + `trace` hitting it with none of their rays,
+    // silently.
+    let dir = tempdir();
+    let obj = dir.path().join("far.obj");
+    std::fs::write(&obj, "v 1e9 0 0\nv 1e9 1 0\nv 1e9 0 1\nf 1 2 3\n").unwrap();
+    let field = dir.path().join("far.vlf");
+    vlf(&["bake", s(&obj), "-o", s(&field), "-q"]).ok();
+    let warning = format!(
+        "warning: {}: the scene is 1.414e0 across and 1.000e9 from the origin, where the rays' f32 coordinates are \
+         6.400e1 apart",
+        field.display()
+    );
+    let png = dir.path().join("far.png");
+    let r = vlf(&["render", s(&field), "-o", s(&png), "--width", "16", "--height", "16"]).ok();
+    assert!(r.stderr.starts_with(&warning), "{}", r.stderr);
+    let rays = dir.path().join("far.bin");
+    let r = vlf(&["rays", s(&field), "-o", s(&rays), "--width", "4", "--height", "4"]).ok();
+    assert!(r.stderr.starts_with(&warning), "{}", r.stderr);
+    // The bunny near the origin gets none.
+    let bunny = dir.path().join("bunny.vlf");
+    vlf(&["bake", s(&mesh("bunny.obj")), "-o", s(&bunny), "--directions", "9", "--tiles", "8", "-q"]).ok();
+    let r = vlf(&["render", s(&bunny), "-o", s(&png), "--width", "16", "--height", "16"]).ok();
+    assert!(!r.stderr.contains("warning"), "{}", r.stderr);
+}

@@ -52,4 +52,4 @@ pub use light::{Emitter, Light, default_lights};
 pub use math::V3;
 pub use render::{Background, Frame, MAX_BOUNCES, RayCounts, Settings, render};
 pub use scene::{Scene, SceneOptions, Surface};
-pub use view::{SceneBounds, View};
+pub use view::{MIN_F32_STEPS, SceneBounds, View};

@@ -43,7 +43,11 @@ pub fn run(a: &RaysArgs) -> Result<()> {
         width: a.width,
         height: a.height,
     };
-    let choice = choose_camera(&request, &[], &SceneBounds::of(&field))?;
+    let bounds = SceneBounds::of(&field);
+    if let Some(warning) = bounds.f32_warning() {
+        eprintln!("warning: {}: {warning}", a.field.display());
+    }
+    let choice = choose_camera(&request, &[], &bounds)?;
     let (width, height) = (choice.width, choice.height);
     let rays = width as u64 * height as u64;
     let bytes = rays * size_of::<Ray>() as u64;
