@@ -471,9 +471,11 @@ pub struct GenArgs {
     /// Seed of the random scenes: the same seed gives the same file, byte for byte.
     #[arg(long, default_value_t = 1, value_name = "S", value_parser = between(0, u64::MAX), allow_negative_numbers = true)]
     pub seed: u64,
-    /// Random scene: half-extent of each triangle around its centre (more than 0, at most 1000).
+    /// Random scene: half-extent of each triangle around its centre (1e-5 to 1000: near the
+    /// cube's corners f32 numbers are 1.2e-7 apart, and smaller triangles collapse to zero area,
+    /// which a bake drops).
     #[arg(long, default_value_t = generate::DEFAULT_TRIANGLE_SIZE, value_name = "SIZE",
-          value_parser = real(0.0, 1000.0, (true, false)), allow_negative_numbers = true)]
+          value_parser = real(1e-5, 1000.0, (false, false)), allow_negative_numbers = true)]
     pub size: f64,
     /// The OBJ file to write.
     #[arg(short, long, value_name = "FILE")]

@@ -189,6 +189,11 @@ fn out_of_range_values_are_bad_command_lines_with_one_message() {
             "--threads must be between 1 and 1024, got x",
         ),
         (vec!["gen", "random", "--count", "-3", "-o", s(&out)], "--count must be between 1 and 4294967295, got -3"),
+        // Triangles smaller than f32 resolves near the cube's corners would all be dropped by a bake.
+        (
+            vec!["gen", "random", "--size", "1e-300", "-o", s(&out)],
+            "--size must be between 0.00001 and 1000, got 1e-300",
+        ),
         // A grid's range is its own, whichever end the value is off.
         (
             vec!["gen", "grid", "--count", "0", "-o", s(&out)],
