@@ -42,13 +42,9 @@ impl EntryFloor {
     }
 
     /// At least how many bytes a field (or shard) of these directions on `tiles`² tiles over
-    /// `triangles` triangles takes: [`size::lower_bound`], with these entries' refs in place of
-    /// its one per triangle.
+    /// `triangles` triangles takes: [`size::lower_bound_with_refs`], a ref for each entry.
     pub fn bytes_at_least(&self, tiles: u32, triangles: u64) -> u64 {
-        let count = self.directions.len() as u64;
-        let beyond = self.total.saturating_sub(count.saturating_mul(triangles));
-        size::lower_bound(count, tiles as u64 * tiles as u64, triangles)
-            .saturating_add(beyond.saturating_mul(size::REF))
+        size::lower_bound_with_refs(self.directions.len() as u64, tiles as u64 * tiles as u64, triangles, self.total)
     }
 
     /// The floor of `directions` of the field on `grid` over `prep`, measured on as many of them
@@ -83,9 +79,9 @@ impl EntryFloor {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::direction::{Limit, Scratch, build_direction};
     use crate::params::{DepthPolicy, Params};
     use crate::scene::Scene;
+    use vlf_raster::MAX_WORDS;
 
     /// A grid of `side`² unit squares (two triangles each) in the plane z = x / 2.
     fn sheet(side: usize) -> Scene {
@@ -113,9 +109,11 @@ mod tests {
         let made: Vec<u64> = lattice
             .iter()
             .map(|&d| {
-                let data =
-                    build_direction(&prep, &params, &frame(d), 0, &mut Scratch::default(), Limit::FORMAT).unwrap();
-                data.stats.tile_triangle_sum
+                // The raster kernel itself (not the bake's wrapper, which imports what imports
+                // this module).
+                let (v, t, m) = (&prep.vertices, &prep.triangles, frame(d));
+                let data = vlf_raster::build_direction(v, t, &grid, &m, &mut vlf_raster::Scratch::default(), MAX_WORDS);
+                data.unwrap().stats.tile_triangle_sum
             })
             .collect();
         let all = EntryFloor::measure(&prep, &grid, 0..lattice.len() as u32);

@@ -15,7 +15,6 @@
 //! Where tiles are much smaller than the triangles, these dominate.
 
 use crate::error::BakeError;
-use crate::floor::EntryFloor;
 use crate::params::human_bytes;
 
 /// Bytes of memory a bake touches per tile of one direction, per thread.
@@ -30,17 +29,16 @@ pub const TOUCHED_PER_ENTRY: u64 = 40;
 /// Bytes of address space a bake reserves per entry of the direction it bakes.
 pub const RESERVED_PER_ENTRY: u64 = 56;
 
-/// `Err` if baking `tiles × tiles` grids on `threads` threads, with the entries `floor` says the
-/// directions make, needs more memory than [`budget`] allows, or more address space than an
+/// `Err` if baking `tiles × tiles` grids on `threads` threads, with `entries` triangle-tile pairs
+/// (at least) in the direction that makes the most (`crate::floor`), needs more memory than [`budget`] allows, or more address space than an
 /// address-space limit leaves (as far as the operating system tells: Linux's `/proc`; a failed
 /// allocation is still an error, not an abort). The entries are those of the direction that
 /// makes the most, on one thread: the others' are not counted, since they start and finish at
 /// other times (measured: a bake of the 3,674-triangle bunny on 3 directions × 8,192² tiles and
 /// 2 threads peaked at 4.3 GB resident, and this figure is 5.0 GB).
-pub fn check(tiles: u32, threads: usize, floor: &EntryFloor) -> Result<(), BakeError> {
+pub fn check(tiles: u32, threads: usize, entries: u64) -> Result<(), BakeError> {
     let threads = threads.max(1);
     let grid = tiles as u64 * tiles as u64 * threads as u64;
-    let entries = floor.largest;
     let (budget, why) = budget();
     let address_space = address_space().map(|(limit, used)| {
         let why = format!("what the address-space limit of {} (ulimit -v) leaves", human_bytes(limit));
@@ -60,7 +58,7 @@ pub fn check(tiles: u32, threads: usize, floor: &EntryFloor) -> Result<(), BakeE
                 threads,
                 per_tile,
                 per_entry,
-                entries: floor.largest,
+                entries,
                 need: human_bytes(need),
                 allowed: format!("{} may be used ({why})", human_bytes(allowed)),
             });
@@ -162,20 +160,17 @@ mod tests {
     #[test]
     fn a_grid_past_any_machine_is_refused_by_its_numbers() {
         // 65,536² tiles on 2 threads: about 206 GB touched, 481 GB reserved.
-        let e = check(65_536, 2, &EntryFloor::per_triangle(1, 0..3))
-            .expect_err("no machine running these tests has 206 GB free");
+        let e = check(65_536, 2, 1).expect_err("no machine running these tests has 206 GB free");
         let text = e.to_string();
         assert!(text.contains("65536 × 65536 tiles on 2 thread(s)") && text.contains("lower --tiles"), "{text}");
-        check(16, 2, &EntryFloor::per_triangle(1000, 0..3)).expect("a small grid fits");
+        check(16, 2, 1000).expect("a small grid fits");
     }
 
     #[test]
     fn entries_past_any_machine_are_refused_whatever_the_grid() {
         // 16² tiles, but 2⁴⁰ triangle-tile pairs in the largest direction: 40 TiB touched.
-        let floor = EntryFloor { directions: 0..3, total: 3 << 40, largest: 1 << 40, mean: (1u64 << 40) as f64 };
-        let text = check(16, 2, &floor).expect_err("no machine running these tests has 40 TiB free").to_string();
+        let text = check(16, 2, 1 << 40).expect_err("no machine running these tests has 40 TiB free").to_string();
         assert!(text.contains("triangle-tile pairs, 1099511627776 or more in the largest direction"), "{text}");
-        let one = EntryFloor { directions: 0..1, total: 1 << 20, largest: 1 << 20, mean: (1u64 << 20) as f64 };
-        check(16, 2, &one).expect("a megabyte of pairs fits");
+        check(16, 2, 1 << 20).expect("a megabyte of pairs fits");
     }
 }

@@ -189,7 +189,7 @@ pub fn write_into(
     };
     // The room the bake needs, before any work: memory for its directions, disk for its output.
     let floor = EntryFloor::measure(prep, &params.grid(prep.radius), range.clone());
-    crate::memory::check(params.tiles, rayon::current_num_threads(), &floor)?;
+    crate::memory::check(params.tiles, rayon::current_num_threads(), floor.largest)?;
     let what = if shard.is_some() { "shard" } else { "field" };
     crate::disk::check(path, what, Need::of(choice, prep.triangle_count() as u64, &floor))?;
 

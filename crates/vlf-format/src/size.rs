@@ -42,6 +42,13 @@ pub const fn lower_bound(directions: u64, tiles_per_direction: u64, triangles: u
     directions * (BEAM + tiles_per_direction * TILE + triangles * REF + DIRECTION_FRAME) + TRIANGLE * triangles
 }
 
+/// [`lower_bound`] with `refs` refs in all (the triangle-tile pairs the directions are known to
+/// make) in place of one per triangle and direction, when they are more.
+pub const fn lower_bound_with_refs(directions: u64, tiles_per_direction: u64, triangles: u64, refs: u64) -> u64 {
+    let beyond = refs.saturating_sub(directions.saturating_mul(triangles));
+    lower_bound(directions, tiles_per_direction, triangles).saturating_add(beyond.saturating_mul(REF))
+}
+
 /// An estimate of a field's size from the mean bytes of its directions (measured on a sample):
 /// every direction, the triangles' records, and the [`PADDING_ALLOWANCE`].
 pub const fn estimate(directions: u64, bytes_per_direction: u64, triangles: u64) -> u64 {
@@ -71,5 +78,10 @@ mod tests {
         let per_direction = 32 + 16 * 4 + 10 * 8 + 16 + 72;
         assert_eq!(lower_bound(3, 16, 10), 3 * per_direction + 10 * 44);
         assert_eq!(estimate(3, 1000, 10), 3000 + 440 + 1024);
+        // Refs beyond one per triangle and direction add theirs; fewer change nothing.
+        assert_eq!(lower_bound_with_refs(3, 16, 10, 30), lower_bound(3, 16, 10));
+        assert_eq!(lower_bound_with_refs(3, 16, 10, 5), lower_bound(3, 16, 10));
+        assert_eq!(lower_bound_with_refs(3, 16, 10, 130), lower_bound(3, 16, 10) + 100 * 8);
+        assert_eq!(lower_bound_with_refs(3, 16, 10, u64::MAX), u64::MAX);
     }
 }

@@ -314,8 +314,7 @@ impl Coverage {
     /// for each pair (the blocks' headers and leaf words not counted).
     fn bytes_about(&self, directions: u64, tiles: u32, triangles: u64) -> u64 {
         let refs = (self.per_direction * directions as f64) as u64;
-        size::lower_bound(directions, tiles as u64 * tiles as u64, triangles)
-            .saturating_add(refs.saturating_sub(directions.saturating_mul(triangles)).saturating_mul(size::REF))
+        size::lower_bound_with_refs(directions, tiles as u64 * tiles as u64, triangles, refs)
     }
 }
 
@@ -389,8 +388,7 @@ pub fn choose<M: Measure>(scene: &M, config: &BakeConfig) -> Result<Choice, M::E
         let mut lb = lower_bound_bytes(tris, lattice_n, tiles);
         if lb <= budget {
             let l = Lattice::new(lattice_n).direction_count();
-            let beyond = scene.coverage(&params).at_least.saturating_sub(l.saturating_mul(tris));
-            lb = lb.saturating_add(beyond.saturating_mul(size::REF));
+            lb = size::lower_bound_with_refs(l, tiles as u64 * tiles as u64, tris, scene.coverage(&params).at_least);
         }
         if lb > budget {
             return Err(ParamsError::ExplicitOverBudget {
