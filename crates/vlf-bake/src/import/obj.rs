@@ -12,7 +12,7 @@
 //! only the material names (to number them as sources record them) and maps each material to the
 //! Whitted model of MATERIALS (`formats/vlf.md` §5.10).
 
-use super::input::{NotARegularFile, ReadFile};
+use super::input::{NotARegularFile, ReadFile, not_text};
 use crate::scene::{ImportError, MaterialDesc, SceneBuilder, SourceDesc};
 use std::borrow::Cow;
 use std::cell::{Cell, RefCell};
@@ -39,9 +39,9 @@ pub(super) fn import(
     // A GLB or a field named `.obj`, and a start that is not text, were refused by their first
     // bytes (`super::check_start`); what is not UTF-8 further in is refused here.
     let err = |message: String| ImportError::Obj { path: path.to_path_buf(), message };
-    let text = std::str::from_utf8(bytes).map_err(|e| {
-        let line = 1 + bytes[..e.valid_up_to()].iter().filter(|&&b| b == b'\n').count();
-        err(format!("not UTF-8 text (invalid byte on line {line}); is this an OBJ file?"))
+    let text = std::str::from_utf8(bytes).map_err(|_| {
+        let why = not_text(bytes, bytes.len() as u64).unwrap_or_default();
+        err(format!("{why}; is this an OBJ file?"))
     })?;
     // A byte-order mark is no part of the first statement (tobj would read `\u{feff}v` as an
     // unknown word and drop the line, shifting every face's vertices).
