@@ -521,7 +521,8 @@ fn a_packed_field_that_unpacks_past_the_memory_is_refused_before_decoding() {
         assert!(line.starts_with(&format!("error: {expected}")), "{}: {line}", args[0]);
         assert!(line.ends_with("`vlf-bake unpack` decodes it to a file instead"), "{line}");
     }
-    // A scene file's fields are held to the budget each.
+    // A scene file's fields are held to the budget (together:
+    // `a_scene_files_packed_fields_share_one_memory_budget`).
     let scene = dir.path().join("scene.json");
     std::fs::write(&scene, r#"{"instances": [{"field": "packed.vlf"}, {"field": "bomb.vlf"}]}"#).unwrap();
     let line = vlf(&["trace", "--scene", s(&scene), "--rays", s(&rays), "-o", s(&hits)]).one_error_line().to_string();
@@ -531,4 +532,34 @@ fn a_packed_field_that_unpacks_past_the_memory_is_refused_before_decoding() {
             && line.contains("more than the limit"),
         "{line}"
     );
+}
+
+#[test]
+fn a_scene_files_packed_fields_share_one_memory_budget() {
+    // Each packed field of a scene is decoded into memory: held to the budget one by one, a scene
+    // of many could claim the budget many times over.
+    let dir = tempdir();
+    let packed = dir.path().join("a.vlf");
+    vlf(&["pack", s(&bunny(dir.path())), "-o", s(&packed), "-q"]).ok();
+    std::fs::copy(&packed, dir.path().join("b.vlf")).unwrap();
+    let each = vlf_runtime::Field::open(&packed).unwrap().len_bytes();
+    let scene = dir.path().join("scene.json");
+    // `a.vlf` twice: one field, decoded once, counted once.
+    std::fs::write(&scene, r#"{"instances": [{"field": "a.vlf"}, {"field": "a.vlf"}, {"field": "b.vlf"}]}"#).unwrap();
+    let no_meshes = |p: &Path| -> Result<Vec<[[f64; 3]; 3]>, String> { panic!("no mesh is inserted: {p:?}") };
+    let load = |limit: u64| {
+        let file = vlf_scene::SceneFile::read(&scene).unwrap();
+        file.load_with(&no_meshes, vlf_runtime::OpenOptions::new().max_unpacked_bytes(limit)).map(|_| ())
+    };
+    load(2 * each).unwrap();
+    let e = load(2 * each - 1).unwrap_err().to_string();
+    assert!(
+        e.contains("instance 2: key \"field\"")
+            && e.contains(&format!("unpacks to {each} bytes, more than the limit of {} bytes", each - 1))
+            && e.contains(&format!("opened before it take {each} of the {} bytes allowed", 2 * each - 1)),
+        "{e}"
+    );
+    // One field alone within the limit opens.
+    std::fs::write(&scene, r#"{"instances": [{"field": "b.vlf"}]}"#).unwrap();
+    load(each).unwrap();
 }

@@ -209,6 +209,12 @@ impl OpenOptions {
         self
     }
 
+    /// The limit set by [`OpenOptions::max_unpacked_bytes`], if any: for a caller that opens
+    /// several fields and holds them to one budget together.
+    pub fn unpacked_limit(&self) -> Option<u64> {
+        self.max_unpacked_bytes
+    }
+
     /// Opens a field by memory-mapping it. Checks the header, the section table and the content
     /// hash, in time independent of the file's size (no section is read or hashed: `vlf-bake dump
     /// --verify` does that); reads nothing else until queried.

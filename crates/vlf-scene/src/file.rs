@@ -13,7 +13,7 @@ use serde_json::{Map, Value};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
-use vlf_runtime::{Field, OpenOptions};
+use vlf_runtime::{Field, FormatError, OpenError, OpenOptions};
 
 /// The largest scene file read: JSON this long describes millions of instances.
 pub const MAX_FILE_BYTES: u64 = 64 << 20;
@@ -231,8 +231,9 @@ impl SceneFile {
         self.load_with(meshes, &OpenOptions::new())
     }
 
-    /// [`SceneFile::load`], opening the fields with `options` (a packed field's cap on the memory
-    /// it decodes into, [`OpenOptions::max_unpacked_bytes`], applies to each field).
+    /// [`SceneFile::load`], opening the fields with `options`. A cap on the memory packed fields
+    /// decode into ([`OpenOptions::max_unpacked_bytes`]) holds for all of the scene's packed
+    /// fields together: each is opened with what the ones before it left.
     ///
     /// # Errors
     /// As [`SceneFile::load`].
@@ -243,11 +244,30 @@ impl SceneFile {
         let key = |p: &Path| std::fs::canonicalize(p).unwrap_or_else(|_| p.to_path_buf());
         let keys: Vec<PathBuf> = self.instances.iter().map(|spec| key(&spec.field)).collect();
         let mut opened: HashMap<&Path, Arc<Field>> = HashMap::new();
+        let (limit, mut unpacked) = (options.unpacked_limit(), 0u64);
         for (i, spec) in self.instances.iter().enumerate() {
             if !opened.contains_key(keys[i].as_path()) {
-                let f = options
-                    .open(&spec.field)
-                    .map_err(|e| ctx.fail(i, "field", format!("cannot open {}: {e}", spec.field.display())))?;
+                let mut these = options.clone();
+                if let Some(limit) = limit {
+                    these.max_unpacked_bytes(limit.saturating_sub(unpacked));
+                }
+                let f = these.open(&spec.field).map_err(|e| {
+                    let before = match (&e, limit) {
+                        (OpenError::Format { error: FormatError::UnpackedTooLarge { .. }, .. }, Some(limit))
+                            if unpacked > 0 =>
+                        {
+                            format!(
+                                " (the scene's packed fields opened before it take {unpacked} of the {limit} bytes \
+                                 allowed for all of them)"
+                            )
+                        }
+                        _ => String::new(),
+                    };
+                    ctx.fail(i, "field", format!("cannot open {}: {e}{before}", spec.field.display()))
+                })?;
+                if f.is_packed() {
+                    unpacked = unpacked.saturating_add(f.len_bytes());
+                }
                 opened.insert(&keys[i], Arc::new(f));
             }
         }

@@ -18,8 +18,8 @@ use vlf_scene::{Affine, Scene, SceneFile};
 /// Reads, checks and loads a scene file: fields opened once each, meshes to insert read with the
 /// bake's importer. The scene file must be a regular file (a device would be read without end, a
 /// pipe waited on); so must the fields (`Field::open`) and meshes (the importer) it names: each
-/// reader refuses anything else (`vlf_runtime::regular`). A packed field is held to the memory
-/// budget, as `super::open_field` holds one given alone.
+/// reader refuses anything else (`vlf_runtime::regular`). Packed fields are held to the memory
+/// budget all together, as `super::open_field` holds one given alone.
 pub fn load(path: &Path) -> Result<Scene> {
     let meshes = |p: &Path| vlf_bake::import::import_paths(&[p]).map(|s| s.world_vertices()).map_err(|e| e.to_string());
     let mut options = OpenOptions::new();
