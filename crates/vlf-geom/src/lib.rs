@@ -53,22 +53,33 @@ impl<'a> BruteForce<'a> {
 
     /// The closest hit, counting into `counter`.
     pub fn closest_hit_with(&self, ray: &Ray, counter: &mut impl Counter) -> Option<Hit> {
+        self.closest_from(ray, self.origin, counter)
+    }
+
+    /// The first hit in id order, counting into `counter`.
+    pub fn any_hit_with(&self, ray: &Ray, counter: &mut impl Counter) -> Option<Hit> {
+        self.any_from(ray, self.origin, counter)
+    }
+
+    /// The closest hit of `ray` moved by `−origin` into the triangles' frame: `origin` is
+    /// the field `self.origin` for a world ray, zero for a local one (already in that frame).
+    fn closest_from(&self, ray: &Ray, origin: [f64; 3], counter: &mut impl Counter) -> Option<Hit> {
         if !ray.is_valid() {
             return None;
         }
         counter.ray();
         let mut best = Closest::new(ray.tmax);
-        TriRay::relative(ray, self.origin).closest_in(Baseline, self.triangles, self.ids(), &mut best, counter);
+        TriRay::relative(ray, origin).closest_in(Baseline, self.triangles, self.ids(), &mut best, counter);
         best.hit
     }
 
-    /// The first hit in id order, counting into `counter`.
-    pub fn any_hit_with(&self, ray: &Ray, counter: &mut impl Counter) -> Option<Hit> {
+    /// The first hit in id order of `ray` moved by `−origin`, as [`Self::closest_from`].
+    fn any_from(&self, ray: &Ray, origin: [f64; 3], counter: &mut impl Counter) -> Option<Hit> {
         if !ray.is_valid() {
             return None;
         }
         counter.ray();
-        TriRay::relative(ray, self.origin).any_in(Baseline, self.triangles, self.ids(), counter)
+        TriRay::relative(ray, origin).any_in(Baseline, self.triangles, self.ids(), counter)
     }
 
     /// The first `max_hits` of every hit on `[tmin, tmax]`, in order of `t` then triangle id
@@ -108,6 +119,18 @@ impl Intersector for BruteForce<'_> {
 
     fn any_hit_counted(&self, ray: &Ray, work: &mut TraceStats) -> Option<Hit> {
         self.any_hit_with(ray, work)
+    }
+
+    fn origin(&self) -> [f64; 3] {
+        self.origin
+    }
+
+    fn closest_hit_local_counted(&self, ray: &Ray, work: &mut TraceStats) -> Option<Hit> {
+        self.closest_from(ray, [0.0; 3], work)
+    }
+
+    fn any_hit_local_counted(&self, ray: &Ray, work: &mut TraceStats) -> Option<Hit> {
+        self.any_from(ray, [0.0; 3], work)
     }
 }
 

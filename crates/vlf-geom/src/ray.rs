@@ -79,6 +79,12 @@ impl Hit {
 
 /// Something that answers ray queries: the field, the kd-tree baseline and the brute-force
 /// reference all implement it, so tests, benchmarks and the renderer treat them alike.
+///
+/// Rays are f32 ([`Ray`]), so a world-space ray origin far from the world's origin is coarse (at
+/// 10⁹ f32 numbers are 64 apart). A tracer whose triangles are stored relative to a point (a
+/// field's centre) therefore also answers *local* rays, whose origin is given relative to
+/// [`Intersector::origin`]: a caller that computes `point − origin` in f64 before rounding keeps
+/// the precision of the scene's own size however far the scene is (the renderer does).
 pub trait Intersector: Sync {
     /// The closest hit in `[tmin, tmax]`, if any.
     fn closest_hit(&self, ray: &Ray) -> Option<Hit>;
@@ -89,6 +95,26 @@ pub trait Intersector: Sync {
     /// The first hit found in `[tmin, tmax]` (not necessarily the closest), adding the work done
     /// to `work`: [`Self::any_hit`] with the hit it found.
     fn any_hit_counted(&self, ray: &Ray, work: &mut TraceStats) -> Option<Hit>;
+
+    /// The point, in world coordinates, that the origins of local rays are relative to
+    /// ([`Self::closest_hit_local_counted`]): the world's origin unless the tracer says otherwise.
+    fn origin(&self) -> [f64; 3] {
+        [0.0; 3]
+    }
+
+    /// [`Self::closest_hit_counted`] for a ray whose origin is given relative to
+    /// [`Self::origin`]; `t`, `u`, `v` and `prim` mean what they mean for world rays. The default
+    /// traces it as a world ray, which is right only while [`Self::origin`] is zero: a tracer that
+    /// overrides one overrides all three.
+    fn closest_hit_local_counted(&self, ray: &Ray, work: &mut TraceStats) -> Option<Hit> {
+        self.closest_hit_counted(ray, work)
+    }
+
+    /// [`Self::any_hit_counted`] for a ray given relative to [`Self::origin`], as
+    /// [`Self::closest_hit_local_counted`].
+    fn any_hit_local_counted(&self, ray: &Ray, work: &mut TraceStats) -> Option<Hit> {
+        self.any_hit_counted(ray, work)
+    }
 }
 
 /// Counters of the work traversals did, shared by every acceleration structure so benchmarks

@@ -107,23 +107,34 @@ impl KdTree {
     /// The closest hit on `[tmin, tmax]`, if any.
     #[inline]
     pub fn closest_hit(&self, ray: &Ray) -> Option<Hit> {
-        self.trace::<false, _>(ray, &mut ())
+        self.trace::<false, _>(ray, self.origin, &mut ())
     }
 
     /// [`Self::closest_hit`], counting the work done into `stats`.
     pub fn closest_hit_counted(&self, ray: &Ray, stats: &mut TraceStats) -> Option<Hit> {
-        self.trace::<false, _>(ray, stats)
+        self.trace::<false, _>(ray, self.origin, stats)
     }
 
     /// Whether anything is hit on `[tmin, tmax]`; the first hit found ends the search.
     #[inline]
     pub fn any_hit(&self, ray: &Ray) -> bool {
-        self.trace::<true, _>(ray, &mut ()).is_some()
+        self.trace::<true, _>(ray, self.origin, &mut ()).is_some()
     }
 
     /// The first hit found on `[tmin, tmax]` (not necessarily the closest), counting the work.
     pub fn any_hit_counted(&self, ray: &Ray, stats: &mut TraceStats) -> Option<Hit> {
-        self.trace::<true, _>(ray, stats)
+        self.trace::<true, _>(ray, self.origin, stats)
+    }
+
+    /// [`Self::closest_hit_counted`] for a ray whose origin is given relative to the tree's
+    /// origin ([`Self::relative_to`]; the world's origin for a tree of world triangles).
+    pub fn closest_hit_local_counted(&self, ray: &Ray, stats: &mut TraceStats) -> Option<Hit> {
+        self.trace::<false, _>(ray, [0.0; 3], stats)
+    }
+
+    /// [`Self::any_hit_counted`] for a ray given relative to the tree's origin.
+    pub fn any_hit_local_counted(&self, ray: &Ray, stats: &mut TraceStats) -> Option<Hit> {
+        self.trace::<true, _>(ray, [0.0; 3], stats)
     }
 
     /// `hit` with its `prim` turned from an index into the tree's triangles into the caller's id.
@@ -132,14 +143,16 @@ impl KdTree {
         Hit { prim: self.prims[hit.prim as usize], ..hit }
     }
 
-    /// The traversal, generic over what it counts and over whether the first hit ends it.
+    /// The traversal, generic over what it counts and over whether the first hit ends it, of
+    /// `ray` moved by `−origin` into the triangles' frame (the tree's origin for a world ray, zero
+    /// for a local one).
     #[inline(always)]
-    fn trace<const ANY: bool, C: Counter>(&self, ray: &Ray, counter: &mut C) -> Option<Hit> {
+    fn trace<const ANY: bool, C: Counter>(&self, ray: &Ray, origin: [f64; 3], counter: &mut C) -> Option<Hit> {
         if !ray.is_valid() {
             return None;
         }
         let (lo, hi) = self.root?;
-        let o: [f64; 3] = std::array::from_fn(|i| ray.org[i] as f64 - self.origin[i]);
+        let o: [f64; 3] = std::array::from_fn(|i| ray.org[i] as f64 - origin[i]);
         // `+ 0.0` turns −0 into +0, so a zero component always gives +∞ and "positive" below.
         let inv = ray.dir.map(|d| 1.0 / (d as f64 + 0.0));
         // Clip to the (grown) scene box. An axis the ray is parallel to only tests the origin.
@@ -164,7 +177,7 @@ impl KdTree {
         }
         counter.ray();
 
-        let tri_ray = TriRay::relative(ray, self.origin);
+        let tri_ray = TriRay::relative(ray, origin);
         let tris = &self.triangles[..];
         let mut best = Closest::new(ray.tmax);
         let mut stack = [Entry { node: 0, t0: 0.0, t1: 0.0 }; MAX_DEPTH as usize];
@@ -237,6 +250,20 @@ impl Intersector for KdTree {
     fn any_hit_counted(&self, ray: &Ray, work: &mut TraceStats) -> Option<Hit> {
         KdTree::any_hit_counted(self, ray, work)
     }
+
+    fn origin(&self) -> [f64; 3] {
+        self.origin
+    }
+
+    #[inline]
+    fn closest_hit_local_counted(&self, ray: &Ray, work: &mut TraceStats) -> Option<Hit> {
+        KdTree::closest_hit_local_counted(self, ray, work)
+    }
+
+    #[inline]
+    fn any_hit_local_counted(&self, ray: &Ray, work: &mut TraceStats) -> Option<Hit> {
+        KdTree::any_hit_local_counted(self, ray, work)
+    }
 }
 
 #[cfg(test)]
@@ -291,5 +318,32 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// Local rays (relative to the tree's origin) keep a scene's precision however far it is:
+    /// the quad at x = 10⁹, where f32 world coordinates are 64 apart, is hit where a local ray
+    /// aims, as brute force over the same relative triangles hits it.
+    #[test]
+    fn local_rays_of_a_far_quad_match_brute_force() {
+        let q = [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]];
+        let tris = [[q[0], q[1], q[2]], [q[0], q[2], q[3]]];
+        let far = [1e9, 0.0, 0.0];
+        let tree = KdTree::build(&tris, KdParams { max_depth: 8, leaf_size: 1 }).relative_to(far);
+        let bf = BruteForce::relative(&tris, far);
+        assert_eq!((Intersector::origin(&tree), Intersector::origin(&bf)), (far, far));
+        let mut work = TraceStats::default();
+        for i in 0..=16 {
+            let x = i as f32 / 16.0;
+            let ray = Ray::new([x, 0.5, 1.0], [0.0, 0.0, -1.0]);
+            let hit = tree.closest_hit_local_counted(&ray, &mut work);
+            assert_eq!(hit.map(|h| h.t), Some(1.0), "{ray:?}");
+            assert_eq!(hit, bf.closest_hit_local_counted(&ray, &mut work), "{ray:?}");
+            let any = Intersector::any_hit_local_counted(&tree, &ray, &mut work).is_some();
+            assert_eq!((any, bf.any_hit_local_counted(&ray, &mut work).is_some()), (true, true), "{ray:?}");
+        }
+        // A ray beside the quad misses in both.
+        let beside = Ray::new([1.25, 0.5, 1.0], [0.0, 0.0, -1.0]);
+        assert_eq!(tree.closest_hit_local_counted(&beside, &mut work), None);
+        assert_eq!(bf.closest_hit_local_counted(&beside, &mut work), None);
     }
 }

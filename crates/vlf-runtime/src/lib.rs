@@ -650,6 +650,15 @@ impl Intersector for Field {
     fn any_hit_counted(&self, ray: &Ray, work: &mut TraceStats) -> Option<Hit> {
         self.view().any_hit_counted(ray, work)
     }
+    fn origin(&self) -> [f64; 3] {
+        Field::origin(self)
+    }
+    fn closest_hit_local_counted(&self, ray: &Ray, work: &mut TraceStats) -> Option<Hit> {
+        self.view().closest_hit_local_counted(ray, work)
+    }
+    fn any_hit_local_counted(&self, ray: &Ray, work: &mut TraceStats) -> Option<Hit> {
+        self.view().any_hit_local_counted(ray, work)
+    }
 }
 
 impl Intersector for FieldView<'_> {
@@ -664,6 +673,15 @@ impl Intersector for FieldView<'_> {
     }
     fn any_hit_counted(&self, ray: &Ray, work: &mut TraceStats) -> Option<Hit> {
         FieldView::any_hit_counted(self, ray, work)
+    }
+    fn origin(&self) -> [f64; 3] {
+        FieldView::origin(self)
+    }
+    fn closest_hit_local_counted(&self, ray: &Ray, work: &mut TraceStats) -> Option<Hit> {
+        FieldView::closest_hit_local_counted(self, ray, work)
+    }
+    fn any_hit_local_counted(&self, ray: &Ray, work: &mut TraceStats) -> Option<Hit> {
+        FieldView::any_hit_local_counted(self, ray, work)
     }
 }
 

@@ -220,7 +220,12 @@ impl<'a> FieldView<'a> {
     /// cannot be precise. `t`, `u`, `v` and `prim` mean what they mean for world rays.
     #[inline]
     pub fn closest_hit_local(&self, ray: &Ray) -> Option<Hit> {
-        self.closest(ray, [0.0; 3], &mut ())
+        self.closest_hit_local_counted(ray, &mut ())
+    }
+
+    /// [`Self::closest_hit_local`], counting the work done in `counter`.
+    pub fn closest_hit_local_counted(&self, ray: &Ray, counter: &mut impl Counter) -> Option<Hit> {
+        self.closest(ray, [0.0; 3], counter)
     }
 
     /// Whether anything is hit on `[tmin, tmax]`; the first hit found ends the search:
@@ -239,7 +244,12 @@ impl<'a> FieldView<'a> {
     /// [`Self::any_hit`] for a ray given relative to [`Self::origin`].
     #[inline]
     pub fn any_hit_local(&self, ray: &Ray) -> bool {
-        self.any(ray, [0.0; 3], &mut ()).is_some()
+        self.any_hit_local_counted(ray, &mut ()).is_some()
+    }
+
+    /// [`Self::any_hit_counted`] for a ray given relative to [`Self::origin`].
+    pub fn any_hit_local_counted(&self, ray: &Ray, counter: &mut impl Counter) -> Option<Hit> {
+        self.any(ray, [0.0; 3], counter)
     }
 
     #[inline(always)]
