@@ -170,3 +170,50 @@ fn the_work_picture_shows_where_the_tests_go() {
     assert_eq!(clipped.scale_max, 1);
     assert!(tests.iter().zip(clipped.rgb.chunks_exact(3)).all(|(&t, c)| (t == 0) || c == vlf_render::inferno(1.0)));
 }
+
+/// A floor and a triangle above it, 1 unit across, at `at`: every coordinate a dyadic fraction
+/// added to `at`, so the field stores the same local triangles wherever `at` is (exactly).
+fn small_scene_at(dir: &Path, name: &str, at: [f64; 3]) -> Field {
+    let p = |x: f64, y: f64, z: f64| [at[0] + x, at[1] + y, at[2] + z];
+    let triangles = [
+        [p(-0.5, 0.0, -0.5), p(0.5, 0.0, 0.5), p(0.5, 0.0, -0.5)],
+        [p(-0.5, 0.0, -0.5), p(-0.5, 0.0, 0.5), p(0.5, 0.0, 0.5)],
+        [p(-0.25, 0.25, 0.0), p(0.25, 0.25, 0.0), p(0.0, 0.5, 0.125)],
+    ];
+    let scene = vlf_bake::Scene::from_triangles_f64(name, &triangles).unwrap();
+    let config =
+        BakeConfig { directions: Some(9), tiles: Some(8), depth: DepthPolicy::default(), ..BakeConfig::default() };
+    let path = dir.join(format!("{name}.vlf"));
+    vlf_bake::bake_scene(&scene, &config, &path, &NoProgress).unwrap();
+    Field::open(&path).unwrap()
+}
+
+/// A scene far from the world's origin (x = 10⁹, where f32 numbers are 64 apart) is drawn as it is
+/// at the origin: the renderer traces relative to the field's centre, in f64 until each ray is
+/// rounded, so neither the eye nor the hit points nor the lights lose the scene's precision.
+/// World-space f32 rays (the renderer before it did so) hit none of it.
+#[test]
+fn a_small_scene_far_from_the_origin_renders_as_it_does_at_the_origin() {
+    let dir = tempfile::tempdir().unwrap();
+    let settings = Settings { background: vlf_render::Background::Solid([0.0; 3]), ..settings() };
+    let picture = |at: [f64; 3]| {
+        let field = small_scene_at(dir.path(), &format!("at-{}", at[0]), at);
+        let scene = Scene::from_field(&field, &SceneOptions::default());
+        // The camera and the light placed by dyadic offsets too.
+        let p = |x: f64, y: f64, z: f64| [at[0] + x, at[1] + y, at[2] + z];
+        let view =
+            View::look_at(p(0.5, 0.75, 1.0), p(0.0, 0.125, 0.0), [0.0, 1.0, 0.0], 45.0, WIDTH as f64 / HEIGHT as f64);
+        let lights = [Light::point(p(0.5, 2.0, 1.0), 4.0)];
+        render(&field, &scene, &view, &lights, &settings, &|_| {})
+    };
+    let near = picture([0.0; 3]);
+    let far = picture([1e9, 0.0, 0.0]);
+    let drawn = |f: &Frame| f.color.iter().filter(|c| c.iter().any(|&v| v > 0.0)).count();
+    let pixels = (WIDTH * HEIGHT) as usize;
+    assert!(drawn(&near) > pixels / 4, "the scene at the origin fills {} of {pixels} pixels", drawn(&near));
+    assert!(near.rays.shadow > 0, "{:?}", near.rays);
+    assert_eq!(drawn(&far), drawn(&near), "pixels drawn at x = 1e9 and at the origin");
+    let differing = far.color.iter().zip(&near.color).filter(|(a, b)| a != b).count();
+    assert_eq!(differing, 0, "{differing} pixels differ between the scene at x = 1e9 and at the origin");
+    assert_eq!(far.rays, near.rays);
+}

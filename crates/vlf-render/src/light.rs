@@ -66,6 +66,19 @@ impl Light {
         Some(Light { emitter, strength, range })
     }
 
+    /// The light with its position given relative to `origin` (the frame [`crate::render`]
+    /// traces in); the light itself when `origin` is zero.
+    pub(crate) fn relative_to(&self, origin: V3) -> Light {
+        let emitter = match self.emitter {
+            Emitter::Point { position } => Emitter::Point { position: sub(position, origin) },
+            Emitter::Spot { position, direction, cos_inner, cos_outer } => {
+                Emitter::Spot { position: sub(position, origin), direction, cos_inner, cos_outer }
+            }
+            directional @ Emitter::Directional { .. } => directional,
+        };
+        Light { emitter, ..*self }
+    }
+
     /// The light arriving at `p`, or `None` if none does (outside a spot's cone, beyond range).
     pub(crate) fn incident(&self, p: V3) -> Option<Incident> {
         let (position, cone) = match self.emitter {

@@ -118,10 +118,13 @@ enum Kind {
     Refraction,
 }
 
-/// One pixel's tracing: the scene, and the counters its rays add to.
+/// One pixel's tracing: the scene, and the counters its rays add to. Every position is relative
+/// to `frame`, the tracer's origin, and every ray is a local one (`Intersector::origin`).
 struct Tracing<'a, T: Intersector + ?Sized> {
     tracer: &'a T,
     scene: &'a Scene,
+    frame: V3,
+    /// The lights, positioned relative to `frame`.
     lights: &'a [Light],
     settings: &'a Settings,
     epsilon: f64,
@@ -137,10 +140,10 @@ impl<T: Intersector + ?Sized> Tracing<'_, T> {
             Kind::Reflection => self.rays.reflection += 1,
             Kind::Refraction => self.rays.refraction += 1,
         }
-        let Some(hit) = self.tracer.closest_hit_counted(ray, &mut self.work) else {
+        let Some(hit) = self.tracer.closest_hit_local_counted(ray, &mut self.work) else {
             return self.settings.background.colour(dir);
         };
-        let Some(sp) = self.scene.surface_point(hit.prim, hit.u, hit.v) else {
+        let Some(sp) = self.scene.surface_point(hit.prim, hit.u, hit.v, self.frame) else {
             return self.settings.background.colour(dir);
         };
         let s = sp.surface;
@@ -168,7 +171,7 @@ impl<T: Intersector + ?Sized> Tracing<'_, T> {
                 (inc.distance - 2.0 * self.epsilon) as f32,
             );
             self.rays.shadow += 1;
-            if self.tracer.any_hit_counted(&shadow, &mut self.work).is_some() {
+            if self.tracer.any_hit_local_counted(&shadow, &mut self.work).is_some() {
                 continue;
             }
             let highlight = dot(reflect(scale(inc.to_light, -1.0), n), view).max(0.0).powf(s.shininess);
@@ -243,6 +246,10 @@ fn refract(d: V3, n: V3, eta: f64) -> Option<(V3, f64, f64)> {
 /// Renders a frame of `scene` seen through `view` under `lights`, tracing with `tracer` on all of
 /// rayon's threads (the global pool, or one installed around the call). `progress(rows)` is
 /// called as rows finish.
+///
+/// Rays are traced relative to the tracer's origin (`Intersector::origin`, a field's centre):
+/// the eye, the hit points and the lights are moved there in f64 before any ray is rounded to
+/// f32, so a scene far from the world's origin is drawn with the precision of its own size.
 pub fn render<T: Intersector + ?Sized>(
     tracer: &T,
     scene: &Scene,
@@ -255,7 +262,10 @@ pub fn render<T: Intersector + ?Sized>(
     let samples = settings.samples.max(1);
     let mut color = vec![[0.0f32; 3]; width * height];
     let mut work = vec![TraceStats::default(); width * height];
-    let epsilon = scene.epsilon();
+    let frame = tracer.origin();
+    let lights: Vec<Light> = lights.iter().map(|l| l.relative_to(frame)).collect();
+    let lights = &lights[..];
+    let epsilon = scene.epsilon(frame);
     let per_pixel = 1.0 / (samples * samples) as f64;
     let (rays, total_work) = color
         .par_chunks_mut(width.max(1))
@@ -268,6 +278,7 @@ pub fn render<T: Intersector + ?Sized>(
                 let mut t = Tracing {
                     tracer,
                     scene,
+                    frame,
                     lights,
                     settings,
                     epsilon,
@@ -279,7 +290,7 @@ pub fn render<T: Intersector + ?Sized>(
                     for i in 0..samples {
                         let fx = (x as f64 + (i as f64 + 0.5) / samples as f64) / width as f64;
                         let fy = (y as f64 + (j as f64 + 0.5) / samples as f64) / height as f64;
-                        let ray = view.ray(fx, fy);
+                        let ray = view.ray_relative_to(frame, fx, fy);
                         let dir = normalize(widen(ray.dir)).unwrap_or(view.forward);
                         sum = add(sum, t.radiance(&ray, dir, 0, [1.0; 3], Kind::Primary));
                     }

@@ -1,7 +1,7 @@
 //! What the renderer shades with: the triangles, their shading normals and their surfaces, taken
 //! from a field (`formats/vlf.md` §5.10 for materials).
 
-use crate::math::{V3, cross, dot, normalize, widen};
+use crate::math::{V3, cross, dot, normalize, sub, widen};
 use vlf_runtime::{Field, Material};
 
 /// A surface of the Whitted model in the renderer's terms: linear RGB weights, sanitised so that
@@ -152,21 +152,24 @@ impl Scene {
         (self.center, self.radius)
     }
 
-    /// A distance small against the scene, large against f32 rounding of its coordinates: how far
-    /// secondary rays start off their surface.
-    pub(crate) fn epsilon(&self) -> f64 {
-        let magnitude = self.radius + self.center.iter().fold(0.0f64, |m, c| m.max(c.abs()));
+    /// A distance small against the scene, large against f32 rounding of its coordinates relative
+    /// to `frame` (the point rays are given relative to): how far secondary rays start off their
+    /// surface. The coordinates are at most the radius plus the centre's distance from `frame`.
+    pub(crate) fn epsilon(&self, frame: V3) -> f64 {
+        let magnitude = self.radius + (0..3).fold(0.0f64, |m, i| m.max((self.center[i] - frame[i]).abs()));
         1e-5 * magnitude
     }
 
-    /// The hit point of triangle `prim` at barycentrics `(u, v)`, or `None` for an id the scene
-    /// does not have (a damaged field).
-    pub(crate) fn surface_point(&self, prim: u32, u: f32, v: f32) -> Option<SurfacePoint> {
+    /// The hit point of triangle `prim` at barycentrics `(u, v)`, relative to `frame` (the point
+    /// rays are given relative to: exact in the triangles' own frame, [`Scene::origin`]), or
+    /// `None` for an id the scene does not have (a damaged field).
+    pub(crate) fn surface_point(&self, prim: u32, u: f32, v: f32, frame: V3) -> Option<SurfacePoint> {
         let t = self.triangles.get(prim as usize)?;
         let [a, b, c] = t.map(widen);
         let (u, v) = (u as f64, v as f64);
         let w = 1.0 - u - v;
-        let point: V3 = std::array::from_fn(|i| self.origin[i] + (w * a[i] + u * b[i] + v * c[i]));
+        let shift = sub(self.origin, frame);
+        let point: V3 = std::array::from_fn(|i| shift[i] + (w * a[i] + u * b[i] + v * c[i]));
         let e1: V3 = std::array::from_fn(|i| b[i] - a[i]);
         let e2: V3 = std::array::from_fn(|i| c[i] - a[i]);
         let wound_normal = normalize(cross(e1, e2))?;

@@ -3,7 +3,7 @@
 //! camera the field carries.
 
 use crate::framing::{self, OUTSIDE_FOV_DEGREES};
-use crate::math::{V3, cross, madd, normalize, widen};
+use crate::math::{V3, cross, madd, normalize, sub, widen};
 use vlf_geom::{Camera, Ray};
 use vlf_runtime::{CameraProjection, Field, SceneCamera};
 
@@ -41,10 +41,13 @@ impl SceneBounds {
         (far.next_up() - far) as f64
     }
 
-    /// A warning when f32 rays cannot resolve the scene: fewer than [`MIN_F32_STEPS`] steps of
-    /// f32 across its diameter. A mesh far from the origin bakes (the field stores it relative to
-    /// its centre), but rays aimed at it land on a coarse grid: a triangle 1 unit across at
-    /// x = 10⁹, where f32 numbers are 64 apart, was hit by none of 307,200 primary rays.
+    /// A warning when world-space f32 rays cannot resolve the scene: fewer than
+    /// [`MIN_F32_STEPS`] steps of f32 across its diameter. A mesh far from the origin bakes (the
+    /// field stores it relative to its centre), but world rays aimed at it land on a coarse grid:
+    /// a triangle 1 unit across at x = 10⁹, where f32 numbers are 64 apart, was hit by none of
+    /// 307,200 primary rays. For the rays files of `vlf-bake rays` (world rays by their format)
+    /// and pictures traced with world rays (a tracer whose origin is the world's, such as a scene
+    /// of instances); [`crate::render`] traces a field relative to its centre, which resolves it.
     pub fn f32_warning(&self) -> Option<String> {
         let (spacing, across) = (self.f32_spacing(), 2.0 * self.radius);
         let far = (0..3).map(|i| self.center[i].abs()).fold(0.0f64, f64::max);
@@ -164,15 +167,21 @@ impl View {
 
     /// The primary ray through image point `(x, y)`, both in `[0, 1]` from the top-left corner.
     pub fn ray(&self, x: f64, y: f64) -> Ray {
+        self.ray_relative_to([0.0; 3], x, y)
+    }
+
+    /// [`View::ray`] with its origin given relative to `origin` (a tracer's,
+    /// `vlf_geom::Intersector::origin`): the eye less `origin` in f64, then rounded to f32, so a
+    /// scene far from the world's origin is seen with the precision of its own size. The world
+    /// ray, bit for bit, when `origin` is zero.
+    pub fn ray_relative_to(&self, origin: V3, x: f64, y: f64) -> Ray {
+        let eye = sub(self.eye, origin);
         let mut ray = match self.projection {
-            Projection::Pinhole(camera) => camera.ray(x, y),
+            Projection::Pinhole(camera) => Ray { org: eye.map(|c| c as f32), ..camera.ray(x, y) },
             Projection::Orthographic { half_width, half_height } => {
-                let origin = madd(
-                    madd(self.eye, self.right, (2.0 * x - 1.0) * half_width),
-                    self.up,
-                    (1.0 - 2.0 * y) * half_height,
-                );
-                Ray::new(origin.map(|c| c as f32), self.forward.map(|c| c as f32))
+                let start =
+                    madd(madd(eye, self.right, (2.0 * x - 1.0) * half_width), self.up, (1.0 - 2.0 * y) * half_height);
+                Ray::new(start.map(|c| c as f32), self.forward.map(|c| c as f32))
             }
         };
         ray.tmin = self.tmin;
