@@ -80,9 +80,6 @@ pub(super) fn setup(
     source: &str,
     frames: u32,
 ) -> Result<Setup> {
-    if let Some(warning) = bounds.f32_warning() {
-        eprintln!("warning: {source}: {warning}");
-    }
     let request = CameraRequest {
         camera: a.camera,
         framing: a.view.map(|v| match v {

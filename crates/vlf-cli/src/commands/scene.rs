@@ -130,6 +130,11 @@ pub fn render(a: &RenderArgs) -> Result<()> {
         }
     }
     let bounds = SceneBounds::of_box(min, max);
+    // A scene of instances is traced with world rays (`Flat`'s origin is the world's), which
+    // cannot resolve a small scene far away; a field alone is traced relative to its centre.
+    if let Some(warning) = bounds.f32_warning() {
+        eprintln!("warning: {}: {warning}", path.display());
+    }
     let s = setup(a, &[], &[], &bounds, &path.display().to_string(), frames)?;
     let options = SceneOptions { smooth: !a.flat, ..SceneOptions::default() };
     check_flattened(&scene, path, options.smooth)?;
