@@ -661,30 +661,6 @@ impl Intersector for Field {
     }
 }
 
-impl Intersector for FieldView<'_> {
-    fn closest_hit(&self, ray: &Ray) -> Option<Hit> {
-        FieldView::closest_hit(self, ray)
-    }
-    fn any_hit(&self, ray: &Ray) -> bool {
-        FieldView::any_hit(self, ray)
-    }
-    fn closest_hit_counted(&self, ray: &Ray, work: &mut TraceStats) -> Option<Hit> {
-        FieldView::closest_hit_counted(self, ray, work)
-    }
-    fn any_hit_counted(&self, ray: &Ray, work: &mut TraceStats) -> Option<Hit> {
-        FieldView::any_hit_counted(self, ray, work)
-    }
-    fn origin(&self) -> [f64; 3] {
-        FieldView::origin(self)
-    }
-    fn closest_hit_local_counted(&self, ray: &Ray, work: &mut TraceStats) -> Option<Hit> {
-        FieldView::closest_hit_local_counted(self, ray, work)
-    }
-    fn any_hit_local_counted(&self, ray: &Ray, work: &mut TraceStats) -> Option<Hit> {
-        FieldView::any_hit_local_counted(self, ray, work)
-    }
-}
-
 #[allow(dead_code)]
 fn assert_send_sync() {
     fn is<T: Send + Sync>() {}

@@ -37,7 +37,7 @@ use crate::trace::{AnySearch, ClosestSearch, trace};
 use crate::walk::{Grid, Leaf, Setup, lower, walk_leaves};
 use vlf_format::block::BOX_CELLS;
 use vlf_format::{FieldReader, TriangleRecord};
-use vlf_geom::{Avx2, Avx512, Baseline, Closest, Counter, Hit, Isa, Ray, TriRay, Triangles};
+use vlf_geom::{Avx2, Avx512, Baseline, Closest, Counter, Hit, Intersector, Isa, Ray, TraceStats, TriRay, Triangles};
 
 /// The field's TRIANGLES section as the leaf kernel reads it.
 pub(crate) struct FieldTriangles<'a>(pub(crate) &'a [TriangleRecord]);
@@ -478,4 +478,29 @@ pub(crate) fn closest_in_refs(
 ) -> bool {
     tri_ray.closest_in(Baseline, tris, refs, best, counter);
     best.hit.is_some() && (best.tmax as f64) <= exit_t
+}
+
+/// The queries above through the trait the renderer, tests and benchmarks share.
+impl Intersector for FieldView<'_> {
+    fn closest_hit(&self, ray: &Ray) -> Option<Hit> {
+        FieldView::closest_hit(self, ray)
+    }
+    fn any_hit(&self, ray: &Ray) -> bool {
+        FieldView::any_hit(self, ray)
+    }
+    fn closest_hit_counted(&self, ray: &Ray, work: &mut TraceStats) -> Option<Hit> {
+        FieldView::closest_hit_counted(self, ray, work)
+    }
+    fn any_hit_counted(&self, ray: &Ray, work: &mut TraceStats) -> Option<Hit> {
+        FieldView::any_hit_counted(self, ray, work)
+    }
+    fn origin(&self) -> [f64; 3] {
+        FieldView::origin(self)
+    }
+    fn closest_hit_local_counted(&self, ray: &Ray, work: &mut TraceStats) -> Option<Hit> {
+        FieldView::closest_hit_local_counted(self, ray, work)
+    }
+    fn any_hit_local_counted(&self, ray: &Ray, work: &mut TraceStats) -> Option<Hit> {
+        FieldView::any_hit_local_counted(self, ray, work)
+    }
 }
