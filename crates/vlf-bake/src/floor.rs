@@ -57,15 +57,15 @@ impl EntryFloor {
         if measured == 0 {
             return floor;
         }
-        // The picked directions only: a lattice may have 2²⁵ + 1 of them.
+        // The picked directions only, each found from its index: a lattice may have 2²⁵ + 1.
         let lattice = Lattice::new(grid.lattice_n);
-        let mut picks = (0..measured).map(|i| directions.start as u64 + i * count / measured).peekable();
-        let mut rotations = Vec::with_capacity(measured as usize);
-        for (j, (a, b)) in lattice.point_iter().enumerate() {
-            if picks.next_if_eq(&(j as u64)).is_some() {
-                rotations.push(frame(lattice.direction(a, b)));
-            }
-        }
+        let rotations: Vec<[f64; 9]> = (0..measured)
+            .map(|i| {
+                let (a, b) =
+                    lattice.point(directions.start as u64 + i * count / measured).expect("a field's direction");
+                frame(lattice.direction(a, b))
+            })
+            .collect();
         let areas = Areas::new(&prep.vertices, &prep.triangles);
         let bounds: Vec<u64> = rotations.par_iter().map(|m| areas.entries_at_least(grid, m)).collect();
         // Each measured direction adds what it makes beyond the one entry per triangle counted.

@@ -60,6 +60,37 @@ impl Lattice {
         })
     }
 
+    /// The stored lattice point of direction `index`, `None` past the last: [`Lattice::point_iter`]
+    /// at `index`, in constant time (a lattice may have 2²⁵ + 1 directions).
+    ///
+    /// The rows `b = −n + k`, `k = 1..=n`, hold the `2k` points `a = −k + 1..=k` (the row
+    /// `b = −n` none), so `k(k − 1)` points come before row `k`; the rows `b ≥ 1` mirror them
+    /// counted from the end, where `(0, n)` is last. The row is found with an integer square
+    /// root: `k(k − 1) ≤ i` exactly when `2k − 1 ≤ √(4i + 1)`.
+    pub fn point(&self, index: u64) -> Option<(i32, i32)> {
+        let n = self.n as u64;
+        // The largest k with k(k − 1) ≤ i.
+        let row = |i: u64| (4 * i + 1).isqrt().div_ceil(2);
+        let lower = n * (n + 1);
+        if index < lower {
+            let k = row(index);
+            let a = index - k * (k - 1) + 1;
+            Some((a as i32 - k as i32, (k as i64 - n as i64) as i32))
+        } else if index < self.direction_count() {
+            // Counted back from the last point, (0, n): row b = n − w has its 2w points
+            // a = w down to −w + 1 after w(w − 1) others.
+            let back = self.direction_count() - 1 - index;
+            if back == 0 {
+                return Some((0, self.n as i32));
+            }
+            let w = row(back - 1);
+            let a = w as i64 - (back - 1 - w * (w - 1)) as i64;
+            Some((a as i32, (n - w) as i32))
+        } else {
+            None
+        }
+    }
+
     /// The unit direction of lattice point `(a, b)`, in f64 (deterministic: one square root).
     pub fn direction(&self, a: i32, b: i32) -> [f64; 3] {
         let z = self.n as i32 - a.abs() - b.abs();
@@ -249,6 +280,77 @@ mod tests {
                         assert_eq!(e, u32::MAX);
                     }
                 }
+            }
+        }
+    }
+
+    #[test]
+    fn points_by_index_are_the_iterators() {
+        for n in 1..=40 {
+            let l = Lattice::new(n);
+            for (i, p) in l.point_iter().enumerate() {
+                assert_eq!(l.point(i as u64), Some(p), "N = {n}, index {i}");
+            }
+            assert_eq!(l.point(l.direction_count()), None);
+            assert_eq!(l.point(u64::MAX), None);
+        }
+        // The largest lattice the format allows (2²⁵ + 1 directions), at indices spread over it
+        // and at both ends of every row of its first and last hundred.
+        let l = Lattice::new(4096);
+        let count = l.direction_count();
+        let mut wanted: Vec<u64> = (0..count).step_by(7919).collect();
+        for k in 1..100u64 {
+            wanted.extend([k * (k - 1), k * (k + 1) - 1, count - 1 - k * (k - 1), count - k * (k + 1)]);
+        }
+        wanted.extend([count / 2, count - 2, count - 1]);
+        wanted.sort_unstable();
+        wanted.dedup();
+        let mut next = wanted.iter().peekable();
+        for (i, p) in l.point_iter().enumerate() {
+            if next.next_if_eq(&&(i as u64)).is_some() {
+                assert_eq!(l.point(i as u64), Some(p), "N = 4096, index {i}");
+            }
+        }
+        assert!(next.peek().is_none());
+        assert_eq!(l.point(count), None);
+    }
+
+    #[test]
+    fn points_by_index_follow_each_other_on_lattices_past_the_format() {
+        // Where walking the lattice would take too long: each sampled point is stored, and the
+        // next index holds the point that follows it in the iterator's order.
+        let follows = |n: i32, (a, b): (i32, i32)| {
+            let w = n - b.abs();
+            if a < w {
+                (a + 1, b)
+            } else {
+                let w = n - (b + 1).abs();
+                (if b + 1 == n { 0 } else { -w + 1 }, b + 1)
+            }
+        };
+        for n in [4096u32, 1 << 15, 46_340, 1 << 20] {
+            let l = Lattice::new(n);
+            let count = l.direction_count();
+            let (ni, mut state) = (n as i32, 0x9e3779b97f4a7c15u64 ^ n as u64);
+            let mut indices: Vec<u64> = (0..2000)
+                .map(|_| {
+                    state ^= state << 13;
+                    state ^= state >> 7;
+                    state ^= state << 17;
+                    state % (count - 1)
+                })
+                .collect();
+            let nn = n as u64;
+            for k in [1, 2, 3, nn / 2, nn - 1, nn] {
+                indices.extend([k * (k - 1), k * (k + 1) - 1, count - 1 - k * (k - 1), count - k * (k + 1)]);
+            }
+            assert_eq!(l.point(0), Some((0, 1 - ni)));
+            assert_eq!(l.point(count - 1), Some((0, ni)));
+            assert_eq!(l.point(count), None);
+            for i in indices.into_iter().filter(|&i| i + 1 < count) {
+                let (a, b) = l.point(i).unwrap();
+                assert!(a.abs() + b.abs() <= ni && l.is_canonical(a, b), "N = {n}, index {i}: ({a}, {b})");
+                assert_eq!(l.point(i + 1), Some(follows(ni, (a, b))), "N = {n}, index {i}: ({a}, {b})");
             }
         }
     }
