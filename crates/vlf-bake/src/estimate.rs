@@ -23,9 +23,9 @@ pub fn sample_direction_bytes(
     samples: usize,
     max_bytes: u64,
 ) -> Result<(Option<u64>, StatisticsRecord), BakeError> {
+    // The picked directions only, each found from its index: a lattice may have 2²⁵ + 1.
     let lattice = Lattice::new(params.lattice_n);
-    let dirs = lattice.directions();
-    let l = dirs.len();
+    let l = lattice.direction_count() as usize;
     let picks: Vec<usize> = (0..samples.min(l))
         .map(|i| (i * l) / samples.min(l) + (l / samples.min(l)) / 2)
         .map(|j| j.min(l - 1))
@@ -38,7 +38,10 @@ pub fn sample_direction_bytes(
     let limit = Limit::memory(threads).min(Limit { words: share / size::LEAF_WORD, why: "the size budget" });
     let results: Vec<Result<DirectionData, BakeError>> = picks
         .par_iter()
-        .map_init(Scratch::default, |s, &j| build_direction(prep, params, &frame(dirs[j]), j, s, limit))
+        .map_init(Scratch::default, |s, &j| {
+            let (a, b) = lattice.point(j as u64).expect("a field's direction");
+            build_direction(prep, params, &frame(lattice.direction(a, b)), j, s, limit)
+        })
         .collect();
     let mut bytes = 0;
     let mut stats = StatisticsRecord::zeroed_record();
