@@ -2,8 +2,11 @@
 //! rasterisations' entries, from the triangles' projected areas ([`vlf_raster::Areas`]). Explicit
 //! parameters are held to `--max-bytes` by it, and every bake's memory and disk checks count it:
 //! on a grid far finer than the triangles, each triangle lands in thousands of tiles, which the
-//! per-tile figures alone do not see.
+//! per-tile figures alone do not see. A field's floor is measured once, while its parameters are
+//! chosen ([`crate::params::Measure::coverage`]), and reaches the checks in the choice
+//! ([`EntryFloor::of_field`]); a shard's is measured on its own directions.
 
+use crate::params::Coverage;
 use crate::prepare::Prepared;
 use rayon::prelude::*;
 use std::ops::Range;
@@ -39,6 +42,18 @@ impl EntryFloor {
     pub fn per_triangle(triangles: u64, directions: Range<u32>) -> EntryFloor {
         let count = directions.len() as u64;
         EntryFloor { directions, total: count.saturating_mul(triangles), largest: triangles, mean: triangles as f64 }
+    }
+
+    /// The floor of all `directions` of a field, from the coverage its parameters were chosen with
+    /// ([`Choice::coverage`](crate::params::Choice::coverage), which a prepared scene measures
+    /// with [`EntryFloor::measure`]): the same figures, not measured again.
+    pub fn of_field(coverage: &Coverage, directions: u32) -> EntryFloor {
+        EntryFloor {
+            directions: 0..directions,
+            total: coverage.at_least,
+            largest: coverage.largest,
+            mean: coverage.per_direction,
+        }
     }
 
     /// At least how many bytes a field (or shard) of these directions on `tiles`² tiles over

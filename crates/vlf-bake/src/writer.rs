@@ -167,6 +167,7 @@ impl Baked {
 
 /// Writes into `out` (an empty, writable file that will be at `path`; its directory holds the
 /// spill file): the whole field, or with `shard` one shard of it (`formats/vlf-shard.md`).
+/// `choice` is one made for `prep` ([`crate::params::choose`]): its coverage is the field's.
 ///
 /// The file is written in place, each byte once: the shared sections first (after the SHARD
 /// record of a shard), then the per-direction sections (`DirectionSections`). Leaves the
@@ -188,7 +189,12 @@ pub fn write_into(
         Some(s) => s.directions(direction_count),
     };
     // The room the bake needs, before any work: memory for its directions, disk for its output.
-    let floor = EntryFloor::measure(prep, &params.grid(prep.radius), range.clone());
+    // A field's floor was measured when its parameters were chosen; a shard's covers its own.
+    let floor = if range.len() == direction_count as usize {
+        EntryFloor::of_field(&choice.coverage, direction_count)
+    } else {
+        EntryFloor::measure(prep, &params.grid(prep.radius), range.clone())
+    };
     crate::memory::check(params.tiles, rayon::current_num_threads(), floor.largest)?;
     let what = if shard.is_some() { "shard" } else { "field" };
     crate::disk::check(path, what, Need::of(choice, prep.triangle_count() as u64, &floor))?;
@@ -312,4 +318,27 @@ pub fn write_into(
         return Err(over_budget(header.file_length, direction_count as usize));
     }
     Ok(Baked { header, statistics, directions: range, direction_count })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::params::{BakeConfig, choose};
+    use crate::progress::NoProgress;
+    use crate::scene::Scene;
+
+    #[test]
+    fn a_field_is_checked_against_the_coverage_its_choice_measured() {
+        let scene = Scene::from_triangles("one", &[[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]]).unwrap();
+        let prep = Prepared::new(&scene);
+        let config = BakeConfig { directions: Some(3), tiles: Some(4), ..BakeConfig::default() };
+        let mut choice = choose(&prep, &config).unwrap();
+        // A choice that says its largest direction makes 2⁵⁰ pairs is refused for memory: the
+        // bake takes the choice's figures, it does not measure the one triangle again.
+        choice.coverage.largest = 1 << 50;
+        let output = std::env::temp_dir().join(format!("vlf-handed-on-{}.vlf", std::process::id()));
+        let e = write_field(&prep, &choice, &config.request(), &output, &NoProgress).unwrap_err();
+        assert!(matches!(e, BakeError::NotEnoughMemory { entries: 1_125_899_906_842_624, .. }), "{e}");
+        assert!(!output.exists());
+    }
 }

@@ -219,6 +219,9 @@ pub struct Choice {
     pub automatic: bool,
     pub estimated_bytes: Option<u64>,
     pub reason: String,
+    /// What [`Measure::coverage`] said of `params` on the scene they were chosen for: measured
+    /// once, while choosing, and handed on to the checks of the bake that follows.
+    pub coverage: Coverage,
 }
 
 /// Why parameters cannot be chosen: a flag out of range, or a budget nothing fits. The messages
@@ -300,13 +303,16 @@ pub struct Coverage {
     /// would pass the budget are not baked to be measured (long thin triangles on fine tiles
     /// make millions).
     pub per_direction: f64,
+    /// At least this many in the direction that makes the most: what the bake's memory check
+    /// counts.
+    pub largest: u64,
 }
 
 impl Coverage {
     /// One pair per triangle in each of `directions` directions: what the format's lower bound
     /// counts.
     pub fn one_each(triangles: u64, directions: u64) -> Coverage {
-        Coverage { at_least: triangles.saturating_mul(directions), per_direction: triangles as f64 }
+        Coverage { at_least: triangles.saturating_mul(directions), per_direction: triangles as f64, largest: triangles }
     }
 
     /// The bytes of a field of `directions` directions on `tiles`² tiles over `triangles`
@@ -329,31 +335,44 @@ fn params_for(radius: f64, lattice_n: u32, tiles: u32, depth: DepthPolicy) -> Pa
     Params { lattice_n, tiles, depth, margin: radius * MARGIN_FRACTION }
 }
 
-/// Whether a candidate may fit `budget`, before it is baked to be measured: its lower bound, then
-/// its tiles' records with a ref for each of its triangle-tile pairs (measured on the triangles'
-/// projections, [`Measure::coverage`]), are within it.
-fn may_fit<M: Measure>(scene: &M, p: &Params, budget: u64) -> bool {
-    let (tris, l) = (scene.triangle_count(), Lattice::new(p.lattice_n).direction_count());
-    lower_bound_bytes(tris, p.lattice_n, p.tiles) <= budget && scene.coverage(p).bytes_about(l, p.tiles, tris) <= budget
+/// A candidate that fits the budget: its parameters, estimated size and load (the mean triangles
+/// per non-empty tile), and its coverage.
+#[derive(Clone, Copy)]
+struct Fit {
+    params: Params,
+    bytes: u64,
+    load: f64,
+    coverage: Coverage,
 }
 
-/// The first of `lattices` on which `tiles`² tiles fit `budget`, with its estimated size and
-/// load; rungs that cannot fit it ([`may_fit`]) are not estimated.
+/// Whether a candidate may fit `budget`, before it is baked to be measured: its lower bound, then
+/// its tiles' records with a ref for each of its triangle-tile pairs (measured on the triangles'
+/// projections, [`Measure::coverage`]), are within it. `Some` with the coverage if it may.
+fn may_fit<M: Measure>(scene: &M, p: &Params, budget: u64) -> Option<Coverage> {
+    let (tris, l) = (scene.triangle_count(), Lattice::new(p.lattice_n).direction_count());
+    if lower_bound_bytes(tris, p.lattice_n, p.tiles) > budget {
+        return None;
+    }
+    Some(scene.coverage(p)).filter(|c| c.bytes_about(l, p.tiles, tris) <= budget)
+}
+
+/// The first of `lattices` on which `tiles`² tiles fit `budget`; rungs that cannot fit it
+/// ([`may_fit`]) are not estimated.
 fn first_that_fits<M: Measure>(
     scene: &M,
     lattices: impl Iterator<Item = u32>,
     tiles: u32,
     budget: u64,
     depth: DepthPolicy,
-) -> Result<Option<(Params, u64, f64)>, M::Error> {
+) -> Result<Option<Fit>, M::Error> {
     for lattice_n in lattices {
-        let p = params_for(scene.radius(), lattice_n, tiles, depth);
-        if !may_fit(scene, &p, budget) {
+        let params = params_for(scene.radius(), lattice_n, tiles, depth);
+        let Some(coverage) = may_fit(scene, &params, budget) else {
             continue;
-        }
-        let (bytes, load) = estimate(scene, &p, budget)?;
+        };
+        let (bytes, load) = estimate(scene, &params, budget)?;
         if bytes <= budget {
-            return Ok(Some((p, bytes, load)));
+            return Ok(Some(Fit { params, bytes, load, coverage }));
         }
     }
     Ok(None)
@@ -386,11 +405,14 @@ pub fn choose<M: Measure>(scene: &M, config: &BakeConfig) -> Result<Choice, M::E
         // also counts the tiles each triangle covers (cheap, but not free on large meshes).
         let params = params_for(scene.radius(), lattice_n, tiles, config.depth);
         let mut lb = lower_bound_bytes(tris, lattice_n, tiles);
+        let mut coverage = None;
         if lb <= budget {
             let l = Lattice::new(lattice_n).direction_count();
-            lb = size::lower_bound_with_refs(l, tiles as u64 * tiles as u64, tris, scene.coverage(&params).at_least);
+            let measured = scene.coverage(&params);
+            lb = size::lower_bound_with_refs(l, tiles as u64 * tiles as u64, tris, measured.at_least);
+            coverage = Some(measured);
         }
-        if lb > budget {
+        let Some(coverage) = coverage.filter(|_| lb <= budget) else {
             return Err(ParamsError::ExplicitOverBudget {
                 directions: Lattice::new(lattice_n).direction_count(),
                 tiles,
@@ -399,8 +421,8 @@ pub fn choose<M: Measure>(scene: &M, config: &BakeConfig) -> Result<Choice, M::E
                 budget,
             }
             .into());
-        }
-        return Ok(Choice { params, automatic: false, estimated_bytes: None, reason: "as requested".into() });
+        };
+        return Ok(Choice { params, automatic: false, estimated_bytes: None, reason: "as requested".into(), coverage });
     }
 
     // Rungs consistent with whatever the user fixed, coarse to fine. A ray crosses about
@@ -421,17 +443,17 @@ pub fn choose<M: Measure>(scene: &M, config: &BakeConfig) -> Result<Choice, M::E
     // Finer tiles stop paying once tiles are nearly singular; more directions always shorten the
     // walk, so with the tiles fixed only the budget stops the climb.
     let sparse_stop = config.tiles.is_none();
-    let mut chosen: Option<(Params, u64, f64)> = None;
+    let mut chosen: Option<Fit> = None;
     for &(lattice_n, tiles) in &rungs {
-        let p = params_for(scene.radius(), lattice_n, tiles, config.depth);
-        if !may_fit(scene, &p, auto_budget) {
+        let params = params_for(scene.radius(), lattice_n, tiles, config.depth);
+        let Some(coverage) = may_fit(scene, &params, auto_budget) else {
             break;
-        }
-        let (bytes, load) = estimate(scene, &p, auto_budget)?;
+        };
+        let (bytes, load) = estimate(scene, &params, auto_budget)?;
         if bytes > auto_budget {
             break;
         }
-        chosen = Some((p, bytes, load));
+        chosen = Some(Fit { params, bytes, load, coverage });
         if sparse_stop && load <= SPARSE_TILE_LOAD {
             break;
         }
@@ -441,7 +463,7 @@ pub fn choose<M: Measure>(scene: &M, config: &BakeConfig) -> Result<Choice, M::E
     // DENSE_TILES when that fits the budget too (docs/benchmarks/parameters.md): on the
     // directions the ladder reached or, if that is too large, on fewer, down to
     // DENSE_MIN_LATTICE: finer tiles matter more to dense scenes than the last rungs of directions.
-    if let (None, None, Some((p, _, load))) = (explicit_n, config.tiles, chosen)
+    if let (None, None, Some(Fit { params: p, load, .. })) = (explicit_n, config.tiles, chosen)
         && load > DENSE_TILE_LOAD
         && p.tiles < DENSE_TILES
     {
@@ -458,7 +480,7 @@ pub fn choose<M: Measure>(scene: &M, config: &BakeConfig) -> Result<Choice, M::E
     // for little work in each. Automatic parameters coarsen such tiles to COARSE_TILES and take
     // the most directions of the ladder that then fit (at least the ones reached: coarser tiles
     // make a smaller field on the same directions).
-    if let (None, None, Some((p, _, load))) = (explicit_n, config.tiles, chosen)
+    if let (None, None, Some(Fit { params: p, load, .. })) = (explicit_n, config.tiles, chosen)
         && load < COARSE_TILE_LOAD
         && p.tiles > COARSE_TILES
     {
@@ -469,7 +491,7 @@ pub fn choose<M: Measure>(scene: &M, config: &BakeConfig) -> Result<Choice, M::E
             chosen = Some(coarser);
         }
     }
-    let Some((params, bytes, load)) = chosen else {
+    let Some(Fit { params, bytes, load, coverage }) = chosen else {
         let (ln, t) = rungs[0];
         return Err(ParamsError::NothingFits {
             directions: Lattice::new(ln).direction_count(),
@@ -494,6 +516,7 @@ pub fn choose<M: Measure>(scene: &M, config: &BakeConfig) -> Result<Choice, M::E
             human_bytes(auto_budget),
             human_bytes(automatic_floor(tris))
         ),
+        coverage,
     })
 }
 

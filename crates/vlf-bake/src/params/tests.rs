@@ -121,6 +121,37 @@ fn explicit_parameters_are_taken_as_requested_without_an_estimate() {
 }
 
 #[test]
+fn the_choice_carries_the_coverage_it_measured_once() {
+    /// Counts the coverages asked of [`UNMEASURED`].
+    struct Counted(RefCell<u32>);
+    impl Measure for Counted {
+        type Error = ParamsError;
+        fn triangle_count(&self) -> u64 {
+            UNMEASURED.triangle_count()
+        }
+        fn radius(&self) -> f64 {
+            UNMEASURED.radius()
+        }
+        fn sample(&self, p: &Params, directions: usize, max_bytes: u64) -> Result<Sample, ParamsError> {
+            UNMEASURED.sample(p, directions, max_bytes)
+        }
+        fn coverage(&self, p: &Params) -> Coverage {
+            *self.0.borrow_mut() += 1;
+            Unmeasured { covered: 3 }.coverage(p)
+        }
+    }
+    let scene = Counted(RefCell::new(0));
+    let config = BakeConfig { directions: Some(33), tiles: Some(16), ..BakeConfig::default() };
+    let choice = choose(&scene, &config).unwrap();
+    assert_eq!(*scene.0.borrow(), 1, "explicit parameters are measured once");
+    assert_eq!(choice.coverage, Coverage { at_least: 33 * 3000, per_direction: 3000.0, largest: 3000 });
+    // Automatic parameters carry the coverage of the rung they chose.
+    let model = Model::new(10_000);
+    let choice = choose(&model, &automatic(1 << 30)).unwrap();
+    assert_eq!(choice.coverage, model.coverage(&choice.params));
+}
+
+#[test]
 fn explicit_parameters_whose_lower_bound_exceeds_max_bytes_are_refused() {
     let lb = lower_bound_bytes(1000, 4, 16);
     assert_eq!(lb, 33 * (32 + 4 * 256 + 8 * 1000 + 16 + 72) + 44 * 1000);
