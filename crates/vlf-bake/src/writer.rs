@@ -200,7 +200,7 @@ pub fn write_into(
     crate::disk::check(path, what, Need::of(choice, prep.triangle_count() as u64, &floor))?;
 
     let shared = shared_sections(prep, params, request);
-    let rotations: Vec<[f64; 9]> = Lattice::new(params.lattice_n).directions().iter().map(|&d| frame(d)).collect();
+    let lattice = Lattice::new(params.lattice_n);
     let n2 = params.tiles as u64 * params.tiles as u64;
     let hash = input_hash(prep.scene, request);
 
@@ -282,7 +282,10 @@ pub fn write_into(
             let result: Result<Vec<DirectionData>, BakeError> = chunk_range
                 .into_par_iter()
                 .map_init(Scratch::default, |s, j| {
-                    let d = build_direction(prep, params, &rotations[j], j, s, limit);
+                    // Each direction's rotation when it is baked, not all of them up front (72
+                    // bytes each, and a field may have 2²⁵ + 1 directions).
+                    let (a, b) = lattice.point(j as u64).expect("a field's direction");
+                    let d = build_direction(prep, params, &frame(lattice.direction(a, b)), j, s, limit);
                     progress.advance(1);
                     d
                 })
