@@ -10,7 +10,9 @@ use crate::params::Params;
 use crate::prepare::Prepared;
 use crate::scene::Scene;
 use std::borrow::Cow;
-use vlf_format::{ParamsRecord, Request, SceneRecord, SectionEntry, SectionKind, VERSION_MAJOR};
+use vlf_format::{
+    DirectionRecord, ParamsRecord, Request, RotationRecord, SceneRecord, SectionEntry, SectionKind, VERSION_MAJOR,
+};
 use vlf_geom::Lattice;
 use vlf_geom::frame::frame;
 
@@ -141,16 +143,24 @@ pub fn scene_sections<'a>(prep: &Prepared<'a>) -> Vec<SharedSection<'a>> {
 }
 
 /// The shared sections computed from the chosen parameters ([`PARAMETER_KINDS`]), in file order.
+/// DIRECTIONS and ROTATIONS are written straight into their bytes, direction by direction: a
+/// field may have 2²⁵ + 1 directions, and the sections are what a bake holds of them.
 fn parameter_sections(params: &Params, request: &Request) -> Vec<SharedSection<'static>> {
     let lattice = Lattice::new(params.lattice_n);
-    let directions = lattice.directions();
-    let rotations: Vec<[f64; 9]> = directions.iter().map(|&d| frame(d)).collect();
-    let dir_records: Vec<[f32; 4]> = directions.iter().map(|d| [d[0] as f32, d[1] as f32, d[2] as f32, 0.0]).collect();
+    let l = lattice.direction_count() as usize;
+    let mut directions = Vec::with_capacity(l * size_of::<DirectionRecord>());
+    let mut rotations = Vec::with_capacity(l * size_of::<RotationRecord>());
+    for (a, b) in lattice.point_iter() {
+        let d = lattice.direction(a, b);
+        let record: DirectionRecord = [d[0] as f32, d[1] as f32, d[2] as f32, 0.0];
+        directions.extend_from_slice(bytemuck::bytes_of(&record));
+        rotations.extend_from_slice(bytemuck::bytes_of::<RotationRecord>(&frame(d)));
+    }
     let record = params_record(params, request);
     vec![
         SharedSection::new(SectionKind::Params, bytemuck::bytes_of(&record).to_vec()),
-        SharedSection::new(SectionKind::Directions, bytemuck::cast_slice(&dir_records).to_vec()),
-        SharedSection::new(SectionKind::Rotations, bytemuck::cast_slice(&rotations).to_vec()),
+        SharedSection::new(SectionKind::Directions, directions),
+        SharedSection::new(SectionKind::Rotations, rotations),
         SharedSection::new(SectionKind::Lookup, bytemuck::cast_slice(&lattice.lookup_table()).to_vec()),
     ]
 }

@@ -110,7 +110,7 @@ impl Lattice {
         let n = self.n as i32;
         let side = (2 * n + 1) as usize;
         let mut table = vec![u32::MAX; side * side];
-        for (j, (a, b)) in self.points().into_iter().enumerate() {
+        for (j, (a, b)) in self.point_iter().enumerate() {
             table[self.cell(a, b)] = j as u32;
             if a.abs() + b.abs() == n {
                 table[self.cell(-a, -b)] = j as u32 | (1 << 31);
