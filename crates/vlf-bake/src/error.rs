@@ -37,7 +37,7 @@ pub enum BakeError {
     /// The bake's buffers for its directions would not fit the memory this machine has free
     /// (checked before any work).
     #[error(
-        "baking {tiles} × {tiles} tiles on {threads} thread(s) needs about {need} of memory (a direction's buffers take about {per_tile} bytes a tile on each thread, and {per_entry} bytes for each of its triangle-tile pairs, {entries} or more in the largest direction), but {allowed}; lower --tiles or --threads"
+        "baking {tiles} × {tiles} tiles on {threads} thread(s) needs about {need} of memory (a direction's buffers take about {per_tile} bytes a tile and {per_entry} bytes for each of its triangle-tile pairs, {entries} or more in the largest direction, on each thread; its direction tables {tables}), but {allowed}; lower --tiles, --threads or --directions"
     )]
     NotEnoughMemory {
         tiles: u32,
@@ -45,6 +45,7 @@ pub enum BakeError {
         per_tile: u64,
         per_entry: u64,
         entries: u64,
+        tables: String,
         need: String,
         allowed: String,
     },

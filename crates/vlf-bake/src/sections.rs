@@ -165,6 +165,14 @@ fn parameter_sections(params: &Params, request: &Request) -> Vec<SharedSection<'
     ]
 }
 
+/// The bytes of memory the parameter sections of a field on lattice `lattice_n` take while a bake
+/// holds them, at most: DIRECTIONS and ROTATIONS ([`vlf_format::size::DIRECTION_FRAME`] a
+/// direction), and LOOKUP twice (the table, then its bytes, while they are built).
+pub fn parameter_bytes(lattice_n: u32) -> u64 {
+    let side = 2 * lattice_n as u64 + 1;
+    Lattice::new(lattice_n).direction_count() * vlf_format::size::DIRECTION_FRAME + 2 * 4 * side * side
+}
+
 /// The PARAMS record (`formats/vlf.md` §5.2) of a bake with `params` chosen for `request`.
 pub fn params_record(params: &Params, request: &Request) -> ParamsRecord {
     ParamsRecord {

@@ -195,7 +195,8 @@ pub fn write_into(
     } else {
         EntryFloor::measure(prep, &params.grid(prep.radius), range.clone())
     };
-    crate::memory::check(params.tiles, rayon::current_num_threads(), floor.largest)?;
+    let tables = crate::sections::parameter_bytes(params.lattice_n) + range.len() as u64 * size::BEAM;
+    crate::memory::check(params.tiles, rayon::current_num_threads(), range.len() as u64, floor.largest, tables)?;
     let what = if shard.is_some() { "shard" } else { "field" };
     crate::disk::check(path, what, Need::of(choice, prep.triangle_count() as u64, &floor))?;
 
