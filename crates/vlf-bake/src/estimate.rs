@@ -39,8 +39,8 @@ pub fn sample_direction_bytes(
     let results: Vec<Result<DirectionData, BakeError>> = picks
         .par_iter()
         .map_init(Scratch::default, |s, &j| {
-            let (a, b) = lattice.point(j as u64).expect("a field's direction");
-            build_direction(prep, params, &frame(lattice.direction(a, b)), j, s, limit)
+            let rotation = frame(lattice.direction_at(j as u64).expect("a field's direction"));
+            build_direction(prep, params, &rotation, j, s, limit)
         })
         .collect();
     let mut bytes = 0;

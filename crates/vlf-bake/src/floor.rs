@@ -76,9 +76,9 @@ impl EntryFloor {
         let lattice = Lattice::new(grid.lattice_n);
         let rotations: Vec<[f64; 9]> = (0..measured)
             .map(|i| {
-                let (a, b) =
-                    lattice.point(directions.start as u64 + i * count / measured).expect("a field's direction");
-                frame(lattice.direction(a, b))
+                frame(
+                    lattice.direction_at(directions.start as u64 + i * count / measured).expect("a field's direction"),
+                )
             })
             .collect();
         let areas = Areas::new(&prep.vertices, &prep.triangles);

@@ -285,8 +285,8 @@ pub fn write_into(
                 .map_init(Scratch::default, |s, j| {
                     // Each direction's rotation when it is baked, not all of them up front (72
                     // bytes each, and a field may have 2²⁵ + 1 directions).
-                    let (a, b) = lattice.point(j as u64).expect("a field's direction");
-                    let d = build_direction(prep, params, &frame(lattice.direction(a, b)), j, s, limit);
+                    let rotation = frame(lattice.direction_at(j as u64).expect("a field's direction"));
+                    let d = build_direction(prep, params, &rotation, j, s, limit);
                     progress.advance(1);
                     d
                 })

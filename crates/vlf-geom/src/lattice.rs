@@ -91,6 +91,12 @@ impl Lattice {
         }
     }
 
+    /// The unit direction of direction `index` ([`Lattice::point`], then [`Lattice::direction`]),
+    /// `None` past the last.
+    pub fn direction_at(&self, index: u64) -> Option<[f64; 3]> {
+        self.point(index).map(|(a, b)| self.direction(a, b))
+    }
+
     /// The unit direction of lattice point `(a, b)`, in f64 (deterministic: one square root).
     pub fn direction(&self, a: i32, b: i32) -> [f64; 3] {
         let z = self.n as i32 - a.abs() - b.abs();
@@ -290,8 +296,10 @@ mod tests {
             let l = Lattice::new(n);
             for (i, p) in l.point_iter().enumerate() {
                 assert_eq!(l.point(i as u64), Some(p), "N = {n}, index {i}");
+                assert_eq!(l.direction_at(i as u64), Some(l.direction(p.0, p.1)), "N = {n}, index {i}");
             }
             assert_eq!(l.point(l.direction_count()), None);
+            assert_eq!(l.direction_at(l.direction_count()), None);
             assert_eq!(l.point(u64::MAX), None);
         }
         // The largest lattice the format allows (2²⁵ + 1 directions), at indices spread over it
