@@ -20,12 +20,13 @@
 //! wins; the bytes are the same) and a reader never sees a partial entry. The modification time
 //! is touched on every hit: pruning by size removes the least recently used entries first.
 //!
-//! **Hits.** The entry is copied into a temporary file beside the output (the kernel's
-//! `copy_file_range`: a reflink on file systems that have them), the copy is opened as a field
-//! (header, table and content hash: time independent of the size) and its key recomputed, and
-//! only then renamed over the output. A copy rather than a hard link: the output is the user's to
-//! modify, chmod or truncate in place, and none of that may reach the cache. An entry that fails
-//! the checks is removed and the bake proceeds. `vlf-bake cache verify` hashes every byte.
+//! **Hits.** The entry is copied into a temporary file beside the output (in whole 2 MiB writes,
+//! as a bake writes), the copy is opened as a field (header, table and content hash) and its key
+//! recomputed, every section's bytes are hashed against the table (`vlf_format::verify_hashes`:
+//! time linear in the size, as the copy's is), and only then is it renamed over the output. A
+//! copy rather than a hard link: the output is the user's to modify, chmod or truncate in place,
+//! and none of that may reach the cache. An entry that fails the checks is removed and the bake
+//! proceeds. `vlf-bake cache verify` checks more: every offset and index, as `dump --verify`.
 
 use crate::atomic::{AtomicFile, remove_stale_temp_files};
 use crate::inspect;
@@ -243,6 +244,12 @@ impl Cache {
             let found = key_of_field(r.header, r.table);
             if found != *key {
                 return Err(format!("it holds the field of key {found}"));
+            }
+            // Every byte, against the section hashes: the open above checked only the header
+            // and table, and a byte flipped on disk inside a section would otherwise reach the
+            // output. (A packed entry's hashes were checked as it was decoded.)
+            if !field.is_packed() {
+                vlf_format::verify_hashes(r, &mut |_, _| {}).map_err(|e| e.to_string())?;
             }
             Ok(CacheHit {
                 header: *r.header,

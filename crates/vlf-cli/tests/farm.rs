@@ -307,8 +307,8 @@ fn the_cache_key_follows_the_inputs_and_the_request() {
     assert_eq!(names_in(&cache.join("v1")).len(), 3);
 }
 
-/// A damaged entry is caught: by the open checks at a hit (header and table), which remove it
-/// and bake again, or by `cache verify` (section bytes), which removes it.
+/// A damaged entry is caught: at a hit (the header and table, and every section's hash), which
+/// removes it and bakes again, and by `cache verify`, which removes it.
 #[test]
 fn damaged_cache_entries_are_caught_and_removed() {
     let dir = tempfile::tempdir().unwrap();
@@ -329,7 +329,20 @@ fn damaged_cache_entries_are_caught_and_removed() {
     assert!(std::fs::read(&rebaked).unwrap() == good);
     assert!(std::fs::read(&entry).unwrap() == good, "the entry was stored again");
 
-    // Damage inside a section is for `cache verify`, which hashes every byte.
+    // Damage inside a section, where the open checks do not look: the hit hashes every section,
+    // so the damaged bytes never reach the output.
+    for (offset, output) in [(good.len() - 200, "c.vlf"), (good.len() / 2, "d.vlf")] {
+        flipped(&entry, &entry, offset);
+        let output = d.join(output);
+        let mut args = vec!["bake", s(&input), "-o", s(&output), "--cache-dir", s(&cache)];
+        args.extend(SMALL);
+        let r = vlf(&args).ok();
+        assert!(r.stderr.contains("was removed") && r.stderr.contains("is corrupt"), "{}", r.stderr);
+        assert!(std::fs::read(&output).unwrap() == good, "flipped byte {offset} reached the output");
+        assert!(std::fs::read(&entry).unwrap() == good, "the entry was stored again");
+    }
+
+    // `cache verify` hashes every byte (and checks every offset and index) of every entry.
     vlf(&["cache", "verify", "--cache-dir", s(&cache)]).ok();
     flipped(&entry, &entry, good.len() - 200);
     let r = vlf(&["cache", "verify", "--cache-dir", s(&cache)]);
@@ -340,10 +353,10 @@ fn damaged_cache_entries_are_caught_and_removed() {
     // A cache that cannot be used only costs the time it would have saved.
     let not_a_dir = d.join("file");
     std::fs::write(&not_a_dir, b"").unwrap();
-    let report = cached_bake(&input, &d.join("c.vlf"), &not_a_dir.join("cache"), &[]);
+    let report = cached_bake(&input, &d.join("e.vlf"), &not_a_dir.join("cache"), &[]);
     assert_eq!(report["cache"]["status"], "disabled");
     assert!(report["cache"]["note"].as_str().unwrap().contains("cannot create the cache directory"), "{report}");
-    assert!(std::fs::read(d.join("c.vlf")).unwrap() == good);
+    assert!(std::fs::read(d.join("e.vlf")).unwrap() == good);
 }
 
 /// `cache list` shows the entries; `cache prune` removes by age and then least recently used

@@ -38,5 +38,5 @@ pub use error::{FormatError, hex};
 pub use layout::*;
 pub use reader::{FieldReader, check_header, check_table, content_hash, parse_head, read_header_and_table};
 pub use section::*;
-pub use verify::{VerifyReport, verify};
+pub use verify::{VerifyReport, verify, verify_hashes};
 pub use writer::{AlignedWriter, FieldFile, HashingWriter, SectionWriter, WRITE_CHUNK};
