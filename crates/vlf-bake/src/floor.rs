@@ -127,7 +127,8 @@ mod tests {
                 // The raster kernel itself (not the bake's wrapper, which imports what imports
                 // this module).
                 let (v, t, m) = (&prep.vertices, &prep.triangles, frame(d));
-                let data = vlf_raster::build_direction(v, t, &grid, &m, &mut vlf_raster::Scratch::default(), MAX_WORDS);
+                let data =
+                    vlf_raster::build_direction(v, t, &grid, &m, &mut vlf_raster::Scratch::default(), MAX_WORDS, None);
                 data.unwrap().stats.tile_triangle_sum
             })
             .collect();

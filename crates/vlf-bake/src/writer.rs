@@ -248,7 +248,7 @@ pub fn write_into(
     // ceiling: long triangles on fine tiles land in many tiles and leaves, and a direction that
     // cannot fit stops as soon as it passes instead of when it is done.
     let limit = Limit::memory(rayon::current_num_threads())
-        .min(Limit { words: ceiling / size::LEAF_WORD, why: "the --max-bytes ceiling" });
+        .min(Limit::new(ceiling / size::LEAF_WORD, "the --max-bytes ceiling"));
     let mut sections = DirectionSections::open(&mut f, range.len() as u64, n2).map_err(io_err)?;
 
     // Directions are baked in parallel, chunk by chunk; a writer thread appends each finished

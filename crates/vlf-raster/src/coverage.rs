@@ -114,7 +114,7 @@ mod tests {
     /// Entries the rasteriser really makes, per triangle, in direction `d`.
     fn rasterised(vertices: &[[f64; 3]], triangles: &[[u32; 3]], grid: &Grid, d: [f64; 3]) -> u64 {
         let m = frame(d);
-        crate::build_direction(vertices, triangles, grid, &m, &mut Scratch::default(), crate::MAX_WORDS)
+        crate::build_direction(vertices, triangles, grid, &m, &mut Scratch::default(), crate::MAX_WORDS, None)
             .unwrap()
             .stats
             .tile_triangle_sum
@@ -190,12 +190,13 @@ mod tests {
         // exactly its words pass, one word fewer does not.
         let (vertices, triangles) = mesh(300);
         let (g, m) = (grid(32), frame([0.36, 0.48, 0.8]));
-        let words = crate::build_direction(&vertices, &triangles, &g, &m, &mut Scratch::default(), crate::MAX_WORDS)
-            .unwrap()
-            .words
-            .len() as u64;
-        assert!(crate::build_direction(&vertices, &triangles, &g, &m, &mut Scratch::default(), words).is_ok());
-        match crate::build_direction(&vertices, &triangles, &g, &m, &mut Scratch::default(), words - 1) {
+        let words =
+            crate::build_direction(&vertices, &triangles, &g, &m, &mut Scratch::default(), crate::MAX_WORDS, None)
+                .unwrap()
+                .words
+                .len() as u64;
+        assert!(crate::build_direction(&vertices, &triangles, &g, &m, &mut Scratch::default(), words, None).is_ok());
+        match crate::build_direction(&vertices, &triangles, &g, &m, &mut Scratch::default(), words - 1, None) {
             Err(crate::DirectionError::TooLarge(e)) => assert!(e.limit == words - 1 && e.count > e.limit, "{e:?}"),
             Err(e) => panic!("{e:?}"),
             Ok(_) => panic!("{words} words made under a limit of {}", words - 1),

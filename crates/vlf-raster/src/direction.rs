@@ -8,6 +8,7 @@
 
 use crate::leaves::{DepthPolicy, Slab, boundaries, leaf_cost, ref_weight};
 use crate::raster::{Part, rasterize};
+use std::sync::atomic::{AtomicU64, Ordering};
 use vlf_format::block::{BOX_CELLS, MAX_LEAVES, Ref, block_words, write_block};
 use vlf_format::{EMPTY_TILE, StatisticsRecord, Z_LEVELS, size};
 use vlf_geom::frame::mul;
@@ -217,7 +218,9 @@ impl Grid {
 /// Builds the direction whose rotation is `m` over `triangles` (three indices each into
 /// `vertices`, which are relative to the field's centre): its TILES entries, its blocks and
 /// statistics. A triangle's id is its index in `triangles`. `TooLarge` if its blocks would pass
-/// `limit` words ([`Grid::write_tile`]).
+/// `limit` words ([`Grid::write_tile`]) or, with a `shared` pool, the words left in it: each
+/// block's words are taken from the pool as it is written, so that directions built at the same
+/// time stop once together they pass what the pool held (checked a tile at a time).
 pub fn build_direction(
     vertices: &[[f64; 3]],
     triangles: &[[u32; 3]],
@@ -225,6 +228,7 @@ pub fn build_direction(
     m: &[f64; 9],
     s: &mut Scratch,
     limit: u64,
+    shared: Option<&AtomicU64>,
 ) -> Result<DirectionData, DirectionError> {
     let n2 = grid.tiles as usize * grid.tiles as usize;
     s.projected.clear();
@@ -272,7 +276,16 @@ pub fn build_direction(
             continue;
         }
         let offset = out.words.len() as u32;
+        let written = out.words.len() as u64;
+        let limit = shared.map_or(limit, |pool| limit.min(written + pool.load(Ordering::Relaxed)));
         let block = grid.write_tile(entries, s, &mut out.words, limit)?;
+        if let Some(pool) = shared {
+            // Another direction may have drawn on the pool since it was read.
+            let words = out.words.len() as u64 - written;
+            if pool.fetch_update(Ordering::Relaxed, Ordering::Relaxed, |left| left.checked_sub(words)).is_err() {
+                return Err(TooLarge { count: out.words.len() as u64, limit }.into());
+            }
+        }
         out.tiles.push(offset);
         let depth = (block.leaves as u64).next_power_of_two().trailing_zeros();
         out.stats.tile_triangle_sum += entries.len() as u64;
