@@ -33,7 +33,7 @@ pub fn sample_direction_bytes(
     // pass `max_bytes · samples / l` the field cannot fit: they draw their blocks' words from one
     // pool of that size and stop when it runs out. (Long thin triangles on fine tiles make
     // blocks of gigabytes; each sample held to that share on its own, a million slivers took
-    // 105 s and 6.9 GB to be refused.)
+    // 98 s and 6.9 GB to be refused.)
     let threads = rayon::current_num_threads().min(picks.len());
     let share = (max_bytes as u128 * picks.len() as u128 / l as u128) as u64;
     let pool = AtomicU64::new(share / size::LEAF_WORD);
