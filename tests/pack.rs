@@ -305,6 +305,59 @@ fn a_decompression_bomb_is_refused_before_or_without_allocating_its_claim() {
     assert!(err.contains("does not decode") || err.contains("decodes to"), "{err}");
 }
 
+/// Without a caller's limit, a packed field is decoded into no more than the memory budget: a
+/// claim past what the machine can give is refused before anything is allocated, naming the
+/// limit, where it used to be allocated (lazily) and decoded until the frames ran out, or, backed
+/// by frames, until the process was killed. A caller may still ask for more.
+#[test]
+fn a_claim_past_the_memory_budget_is_refused_by_default() {
+    let budget = vlf_runtime::memory::budget();
+    if !budget.is_reported() {
+        eprintln!("skipped: this system reports neither its available memory nor an address-space limit");
+        return;
+    }
+    // Random triangles compress poorly: about 36 stored bytes each, which may claim up to
+    // MAX_ZSTD_EXPANSION times as many. Enough of them to claim twice the budget.
+    let per_triangle = 36 * vlf_format::MAX_ZSTD_EXPANSION;
+    let count = (2 * budget.bytes / per_triangle + 1000) as usize;
+    let dir = tempfile::tempdir().unwrap();
+    let scene = Scene::from_triangles("random", &generate::random_cube(count, 0.05, 7)).unwrap();
+    let raw = bake(&scene, dir.path(), "random.vlf", 3, 1, DEFAULT_DEPTH);
+    let bytes = std::fs::read(pack_at(&raw, 1)).unwrap();
+    // Each compressed section claims the same share of its bound: in all, a quarter more than the
+    // budget, which an allocator would grant (lazily) on most machines.
+    let bounds: u64 = head(&bytes).1.iter().filter(|e| e.codec == codec::ZSTD).map(|e| e.stored_length).sum::<u64>()
+        * vlf_format::MAX_ZSTD_EXPANSION;
+    let share = (budget.bytes + budget.bytes / 4) as f64 / bounds as f64;
+    assert!(share < 1.0, "{count} triangles cannot claim {} bytes", budget.bytes);
+    let claim = with_table(&bytes, |t| {
+        for e in t.iter_mut().filter(|e| e.codec == codec::ZSTD) {
+            let el = e.element_size as u64;
+            e.raw_length = (e.stored_length as f64 * vlf_format::MAX_ZSTD_EXPANSION as f64 * share) as u64 / el * el;
+        }
+    });
+    let (claim_header, _) = vlf_format::pack::unpacked_layout(&head(&claim).0, &head(&claim).1).unwrap();
+    assert!(claim_header.file_length > budget.bytes, "{} ≤ {}", claim_header.file_length, budget.bytes);
+    match Field::from_bytes(&claim) {
+        Err(OpenError::Bytes(FormatError::UnpackedTooLarge { bytes, limit })) => {
+            assert_eq!(bytes, claim_header.file_length);
+            // The budget moves while other processes run; it was read again at open.
+            assert!(limit < bytes && limit > budget.bytes / 2, "limit {limit}, budget {budget:?}");
+        }
+        other => panic!("a claim of {} bytes: {:?}", claim_header.file_length, other.err()),
+    }
+    let said = Field::from_bytes(&claim).err().unwrap().to_string();
+    assert!(said.contains("more than the limit") && said.contains("vlf-bake unpack"), "{said}");
+    // Asked for, the claim gets past the limit to the decoder, which finds the frames do not back
+    // it (or to an allocation that fails): never the limit's error.
+    match OpenOptions::new().max_unpacked_bytes(u64::MAX).from_bytes(&claim) {
+        Err(OpenError::Bytes(FormatError::Decode { .. } | FormatError::OutOfMemory { .. })) => {}
+        other => panic!("{:?}", other.err()),
+    }
+    // The unchanged field opens with the defaults.
+    Field::from_bytes(&bytes).expect("the packed field");
+}
+
 #[test]
 fn packing_refuses_packed_damaged_and_non_canonical_inputs() {
     let (dir, packed, _) = tiny_packed();

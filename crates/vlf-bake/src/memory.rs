@@ -24,6 +24,7 @@
 
 use crate::error::BakeError;
 use crate::params::human_bytes;
+use vlf_runtime::memory::{self, Source};
 
 /// Bytes of memory a bake touches per tile of one direction, per thread.
 pub const TOUCHED_PER_TILE: u64 = 24;
@@ -51,7 +52,7 @@ pub fn check(tiles: u32, threads: usize, directions: u64, entries: u64, tables: 
     let threads = threads.max(1).min(directions.max(1).try_into().unwrap_or(usize::MAX));
     let grid = tiles as u64 * tiles as u64;
     let (budget, why) = budget();
-    let address_space = address_space().map(|(limit, used)| {
+    let address_space = memory::address_space().map(|(limit, used)| {
         let why = format!("what the address-space limit of {} (ulimit -v) leaves", human_bytes(limit));
         (limit.saturating_sub(used), why)
     });
@@ -81,60 +82,27 @@ pub fn check(tiles: u32, threads: usize, directions: u64, entries: u64, tables: 
 }
 
 /// The most memory a piece of work may plan to use, and where that comes from (for messages):
-/// three quarters of what the system has available (`MemAvailable` on Linux, else a fixed 4 GiB),
-/// and no more than the process's address-space limit (`ulimit -v`) leaves. The one rule every
-/// up-front memory check uses: the tile grids here, the glTF import, the command line's pictures
-/// and flattened scenes.
+/// [`vlf_runtime::memory::budget`], three quarters of what the system has available
+/// (`MemAvailable` on Linux, else a fixed 4 GiB), and no more than the process's address-space
+/// limit (`ulimit -v`) leaves. The one rule every up-front memory check uses: the tile grids
+/// here, the glTF import, the command line's pictures and flattened scenes, and the runtime's
+/// default cap on decoding a packed field.
 pub fn budget() -> (u64, String) {
-    budget_of(available_memory(), address_space())
+    let b = memory::budget();
+    (b.bytes, why(&b))
 }
 
-/// The share of what the system reports available that [`budget`] plans on.
-const MEMORY_SHARE: (u64, u64) = (3, 4);
-
-/// Where `/proc/meminfo` does not exist: the memory assumed available.
-const ASSUMED_AVAILABLE: u64 = 4 << 30;
-
-/// [`budget`] for what the system reports: `MemAvailable`, and the address-space limit and what
-/// is used of it.
-fn budget_of(available: Option<u64>, address_space: Option<(u64, u64)>) -> (u64, String) {
-    let (available, source) = match available {
-        Some(a) => (a, "available"),
-        None => (ASSUMED_AVAILABLE, "assumed available"),
-    };
-    let share = available / MEMORY_SHARE.1 * MEMORY_SHARE.0;
-    let mut why = format!("three quarters of the {} {source}", human_bytes(available));
-    let mut budget = share;
-    if let Some((limit, used)) = address_space {
-        let left = limit.saturating_sub(used);
-        if left < budget {
-            budget = left;
-            why = format!("what the address-space limit of {} (ulimit -v) leaves", human_bytes(limit));
+/// Where a budget comes from, in words.
+fn why(b: &memory::Budget) -> String {
+    match b.source {
+        Source::Available { available, assumed } => {
+            let source = if assumed { "assumed available" } else { "available" };
+            format!("three quarters of the {} {source}", human_bytes(available))
+        }
+        Source::AddressSpace { limit } => {
+            format!("what the address-space limit of {} (ulimit -v) leaves", human_bytes(limit))
         }
     }
-    (budget, why)
-}
-
-/// `MemAvailable` of `/proc/meminfo`: what can be allocated without swapping.
-fn available_memory() -> Option<u64> {
-    kilobytes_of(&std::fs::read_to_string("/proc/meminfo").ok()?, "MemAvailable:")
-}
-
-/// The soft address-space limit (`ulimit -v`) if there is one, and the address space the process
-/// already uses (`VmSize`), from `/proc/self/limits` and `/proc/self/status`.
-fn address_space() -> Option<(u64, u64)> {
-    let limits = std::fs::read_to_string("/proc/self/limits").ok()?;
-    let line = limits.lines().find(|l| l.starts_with("Max address space"))?;
-    let limit: u64 = line["Max address space".len()..].split_whitespace().next()?.parse().ok()?;
-    let used = std::fs::read_to_string("/proc/self/status").ok().and_then(|s| kilobytes_of(&s, "VmSize:"));
-    Some((limit, used.unwrap_or(0)))
-}
-
-/// The value of a `NAME: N kB` line of a `/proc` file, in bytes.
-fn kilobytes_of(text: &str, name: &str) -> Option<u64> {
-    let line = text.lines().find(|l| l.starts_with(name))?;
-    let kb: u64 = line[name.len()..].trim().trim_end_matches("kB").trim().parse().ok()?;
-    kb.checked_mul(1024)
 }
 
 #[cfg(test)]
@@ -142,32 +110,17 @@ mod tests {
     use super::*;
 
     #[test]
-    fn proc_lines_are_read_in_bytes() {
-        let meminfo = "MemTotal:       24000000 kB\nMemAvailable:   22863076 kB\n";
-        assert_eq!(kilobytes_of(meminfo, "MemAvailable:"), Some(22_863_076 * 1024));
-        assert_eq!(kilobytes_of(meminfo, "MemFree:"), None);
-        let info = "MemTotal:       24683652 kB\nMemFree:         1745980 kB\nMemAvailable:   22943456 kB\n";
-        assert_eq!(kilobytes_of(info, "MemAvailable:"), Some(22_943_456 * 1024));
-        assert_eq!(kilobytes_of(info, "VmSize:"), None);
-        assert_eq!(kilobytes_of("MemAvailable: lots kB", "MemAvailable:"), None);
-    }
-
-    #[test]
-    fn the_budget_is_a_share_of_what_is_available() {
-        // What this machine reports (it changes from one read to the next while other processes
-        // run, so only its sign is checked here).
-        let (budget, why) = budget();
-        assert!(budget > 0, "{why}");
-        // The rule, on fixed figures.
+    fn the_budget_says_where_it_comes_from() {
+        let (bytes, said) = budget();
+        assert!(bytes > 0, "{said}");
         let gib = 1u64 << 30;
-        assert_eq!(budget_of(Some(20 * gib), None), (15 * gib, "three quarters of the 20.0 GiB available".into()));
-        assert_eq!(budget_of(None, None).0, ASSUMED_AVAILABLE / 4 * 3);
-        assert!(budget_of(None, None).1.ends_with("assumed available"));
+        let b = |a, l| why(&memory::budget_of(a, l));
+        assert_eq!(b(Some(20 * gib), None), "three quarters of the 20.0 GiB available");
+        assert_eq!(b(None, None), "three quarters of the 4.0 GiB assumed available");
         assert_eq!(
-            budget_of(Some(20 * gib), Some((4 * gib, gib))),
-            (3 * gib, "what the address-space limit of 4.0 GiB (ulimit -v) leaves".into())
+            b(Some(20 * gib), Some((4 * gib, gib))),
+            "what the address-space limit of 4.0 GiB (ulimit -v) leaves"
         );
-        assert_eq!(budget_of(Some(20 * gib), Some((64 * gib, gib))).0, 15 * gib, "a loose limit changes nothing");
     }
 
     #[test]

@@ -114,8 +114,8 @@ enum VlfStatus
    */
   VLF_ERR_OUT_OF_MEMORY = 6,
   /**
-   * The field exceeds a limit the caller set: a packed field that decodes to more than
-   * `VlfOpenOptions.max_unpacked_bytes`.
+   * The field exceeds a limit: a packed field that decodes to more than
+   * `VlfOpenOptions.max_unpacked_bytes`, or by default than the memory budget.
    */
   VLF_ERR_LIMIT = 7,
 };
@@ -146,9 +146,11 @@ typedef struct VlfScene VlfScene;
 typedef struct VlfOpenOptions {
   /**
    * Refuse a packed field (`vlf-bake pack`) whose decoded size, which its section table states
-   * before anything is allocated, exceeds this many bytes, with `VLF_ERR_LIMIT`. 0: no limit
-   * but the format's own (a packed section decodes to at most a fixed multiple of its size).
-   * Raw fields are mapped, not decoded, and are not affected.
+   * before anything is allocated, exceeds this many bytes, with `VLF_ERR_LIMIT`. 0: the
+   * default, three quarters of the memory the system reports available or what `ulimit -v`
+   * leaves, read at open (where the system reports neither, the format's own bound: a packed
+   * section decodes to at most a fixed multiple of its size). `UINT64_MAX`: the format's bound
+   * alone. Raw fields are mapped, not decoded, and are not affected.
    */
   uint64_t max_unpacked_bytes;
 } VlfOpenOptions;
@@ -563,7 +565,8 @@ const char *vlf_last_error_message(void);
  *
  * Returns `VLF_OK`; `VLF_ERR_IO` if the file cannot be opened or mapped; `VLF_ERR_FORMAT` if it
  * is not a valid field (or a packed field that does not decode); `VLF_ERR_OUT_OF_MEMORY` if a
- * packed field's decoded bytes cannot be allocated; `VLF_ERR_NULL_ARGUMENT`;
+ * packed field's decoded bytes cannot be allocated; `VLF_ERR_LIMIT` if a packed field would
+ * decode to more than the default cap (`vlf_open_path_ex`); `VLF_ERR_NULL_ARGUMENT`;
  * `VLF_ERR_INVALID_ARGUMENT` if `out` is misaligned. `*out` is set to NULL on failure (when `out`
  * itself is usable).
  *
@@ -575,11 +578,13 @@ VlfStatus vlf_open_path(const char *path, struct VlfField **out);
 
 /**
  * `vlf_open_path` with options: `options` NULL gives the defaults (as `vlf_open_path`), else
- * `options->max_unpacked_bytes` caps the memory a packed field may be decoded into (0: no cap
- * but the format's). A packed field over the cap is refused before anything is allocated.
+ * `options->max_unpacked_bytes` caps the memory a packed field may be decoded into (0: the
+ * default, three quarters of the memory the system reports available, or what `ulimit -v`
+ * leaves; `UINT64_MAX`: the format's own bound alone). A packed field over the cap is refused
+ * before anything is allocated.
  *
  * Returns what `vlf_open_path` returns, and `VLF_ERR_LIMIT` for a packed field that decodes to
- * more than `max_unpacked_bytes`; `VLF_ERR_INVALID_ARGUMENT` if `options` is misaligned. `*out`
+ * more than the cap; `VLF_ERR_INVALID_ARGUMENT` if `options` is misaligned. `*out`
  * is set to NULL on failure.
  *
  * # Safety
@@ -598,7 +603,8 @@ VlfStatus vlf_open_path_ex(const char *path,
  * large files prefer `vlf_open_path`, which maps the file instead.
  *
  * Returns `VLF_OK`; `VLF_ERR_FORMAT` if the bytes are not a valid field;
- * `VLF_ERR_OUT_OF_MEMORY` if the copy cannot be allocated; `VLF_ERR_NULL_ARGUMENT` if `data` or
+ * `VLF_ERR_OUT_OF_MEMORY` if the copy cannot be allocated; `VLF_ERR_LIMIT` if a packed field
+ * would decode to more than the default cap (`vlf_open_path_ex`); `VLF_ERR_NULL_ARGUMENT` if `data` or
  * `out` is NULL; `VLF_ERR_INVALID_ARGUMENT` if `out` is misaligned or `len` is too large. `*out`
  * is set to NULL on failure (when `out` itself is usable).
  *
@@ -606,15 +612,17 @@ VlfStatus vlf_open_path_ex(const char *path,
  * `data` must be NULL or point to `len` readable bytes; `out` must be NULL or valid for writing
  * a pointer.
  */
-VlfStatus vlf_open_memory(const void *data, size_t len, struct VlfField **out);
+VlfStatus vlf_open_memory(const void *data,
+                          size_t len,
+                          struct VlfField **out);
 
 /**
  * `vlf_open_memory` with options, as `vlf_open_path_ex`: `options` NULL gives the defaults, else
- * `options->max_unpacked_bytes` caps the memory a packed field may be decoded into (0: no cap
- * but the format's).
+ * `options->max_unpacked_bytes` caps the memory a packed field may be decoded into (0: the
+ * default, as for `vlf_open_path_ex`).
  *
  * Returns what `vlf_open_memory` returns, and `VLF_ERR_LIMIT` for a packed field that decodes to
- * more than `max_unpacked_bytes`; `VLF_ERR_INVALID_ARGUMENT` if `options` is misaligned. `*out`
+ * more than the cap; `VLF_ERR_INVALID_ARGUMENT` if `options` is misaligned. `*out`
  * is set to NULL on failure.
  *
  * # Safety

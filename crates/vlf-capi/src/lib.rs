@@ -120,7 +120,8 @@ pub extern "C" fn vlf_last_error_message() -> *const c_char {
 ///
 /// Returns `VLF_OK`; `VLF_ERR_IO` if the file cannot be opened or mapped; `VLF_ERR_FORMAT` if it
 /// is not a valid field (or a packed field that does not decode); `VLF_ERR_OUT_OF_MEMORY` if a
-/// packed field's decoded bytes cannot be allocated; `VLF_ERR_NULL_ARGUMENT`;
+/// packed field's decoded bytes cannot be allocated; `VLF_ERR_LIMIT` if a packed field would
+/// decode to more than the default cap (`vlf_open_path_ex`); `VLF_ERR_NULL_ARGUMENT`;
 /// `VLF_ERR_INVALID_ARGUMENT` if `out` is misaligned. `*out` is set to NULL on failure (when `out`
 /// itself is usable).
 ///
@@ -134,11 +135,13 @@ pub unsafe extern "C" fn vlf_open_path(path: *const c_char, out: *mut *mut VlfFi
 }
 
 /// `vlf_open_path` with options: `options` NULL gives the defaults (as `vlf_open_path`), else
-/// `options->max_unpacked_bytes` caps the memory a packed field may be decoded into (0: no cap
-/// but the format's). A packed field over the cap is refused before anything is allocated.
+/// `options->max_unpacked_bytes` caps the memory a packed field may be decoded into (0: the
+/// default, three quarters of the memory the system reports available, or what `ulimit -v`
+/// leaves; `UINT64_MAX`: the format's own bound alone). A packed field over the cap is refused
+/// before anything is allocated.
 ///
 /// Returns what `vlf_open_path` returns, and `VLF_ERR_LIMIT` for a packed field that decodes to
-/// more than `max_unpacked_bytes`; `VLF_ERR_INVALID_ARGUMENT` if `options` is misaligned. `*out`
+/// more than the cap; `VLF_ERR_INVALID_ARGUMENT` if `options` is misaligned. `*out`
 /// is set to NULL on failure.
 ///
 /// # Safety
@@ -204,7 +207,8 @@ unsafe fn open_path(
 /// large files prefer `vlf_open_path`, which maps the file instead.
 ///
 /// Returns `VLF_OK`; `VLF_ERR_FORMAT` if the bytes are not a valid field;
-/// `VLF_ERR_OUT_OF_MEMORY` if the copy cannot be allocated; `VLF_ERR_NULL_ARGUMENT` if `data` or
+/// `VLF_ERR_OUT_OF_MEMORY` if the copy cannot be allocated; `VLF_ERR_LIMIT` if a packed field
+/// would decode to more than the default cap (`vlf_open_path_ex`); `VLF_ERR_NULL_ARGUMENT` if `data` or
 /// `out` is NULL; `VLF_ERR_INVALID_ARGUMENT` if `out` is misaligned or `len` is too large. `*out`
 /// is set to NULL on failure (when `out` itself is usable).
 ///
@@ -218,11 +222,11 @@ pub unsafe extern "C" fn vlf_open_memory(data: *const c_void, len: usize, out: *
 }
 
 /// `vlf_open_memory` with options, as `vlf_open_path_ex`: `options` NULL gives the defaults, else
-/// `options->max_unpacked_bytes` caps the memory a packed field may be decoded into (0: no cap
-/// but the format's).
+/// `options->max_unpacked_bytes` caps the memory a packed field may be decoded into (0: the
+/// default, as for `vlf_open_path_ex`).
 ///
 /// Returns what `vlf_open_memory` returns, and `VLF_ERR_LIMIT` for a packed field that decodes to
-/// more than `max_unpacked_bytes`; `VLF_ERR_INVALID_ARGUMENT` if `options` is misaligned. `*out`
+/// more than the cap; `VLF_ERR_INVALID_ARGUMENT` if `options` is misaligned. `*out`
 /// is set to NULL on failure.
 ///
 /// # Safety

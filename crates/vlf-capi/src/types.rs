@@ -27,8 +27,8 @@ pub enum VlfStatus {
     /// Memory for the field could not be allocated (opening from memory, or decoding a packed
     /// field).
     VLF_ERR_OUT_OF_MEMORY = 6,
-    /// The field exceeds a limit the caller set: a packed field that decodes to more than
-    /// `VlfOpenOptions.max_unpacked_bytes`.
+    /// The field exceeds a limit: a packed field that decodes to more than
+    /// `VlfOpenOptions.max_unpacked_bytes`, or by default than the memory budget.
     VLF_ERR_LIMIT = 7,
 }
 
@@ -130,9 +130,11 @@ pub struct VlfProvenance {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
 pub struct VlfOpenOptions {
     /// Refuse a packed field (`vlf-bake pack`) whose decoded size, which its section table states
-    /// before anything is allocated, exceeds this many bytes, with `VLF_ERR_LIMIT`. 0: no limit
-    /// but the format's own (a packed section decodes to at most a fixed multiple of its size).
-    /// Raw fields are mapped, not decoded, and are not affected.
+    /// before anything is allocated, exceeds this many bytes, with `VLF_ERR_LIMIT`. 0: the
+    /// default, three quarters of the memory the system reports available or what `ulimit -v`
+    /// leaves, read at open (where the system reports neither, the format's own bound: a packed
+    /// section decodes to at most a fixed multiple of its size). `UINT64_MAX`: the format's bound
+    /// alone. Raw fields are mapped, not decoded, and are not affected.
     pub max_unpacked_bytes: u64,
 }
 

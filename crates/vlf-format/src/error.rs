@@ -176,8 +176,11 @@ pub enum FormatError {
         /// What went wrong, in words.
         problem: String,
     },
-    /// A packed field would unpack to more bytes than the limit set for decoding it in memory.
-    #[error("the field unpacks to {bytes} bytes, more than the limit of {limit} bytes set for decoding it in memory")]
+    /// A packed field would unpack to more bytes than the limit for decoding it in memory.
+    #[error(
+        "the field unpacks to {bytes} bytes, more than the limit of {limit} bytes for decoding it in memory; \
+         `vlf-bake unpack` decodes it to a file instead"
+    )]
     UnpackedTooLarge {
         /// The unpacked size.
         bytes: u64,

@@ -64,6 +64,7 @@
 mod all_hits;
 mod batch;
 mod filter;
+pub mod memory;
 mod open_error;
 mod prefetch;
 mod query;
@@ -194,23 +195,33 @@ pub struct Parameters {
 }
 
 impl OpenOptions {
-    /// The defaults: no limit on a packed field's decoded size other than the format's own bound.
+    /// The defaults: a packed field may be decoded into no more memory than
+    /// [`memory::budget`] allows when it is opened (see [`OpenOptions::max_unpacked_bytes`]).
     pub fn new() -> OpenOptions {
         OpenOptions::default()
     }
 
     /// Refuse a packed field whose decoded size (which its section table states, before anything
-    /// is allocated) exceeds `bytes`, with [`FormatError::UnpackedTooLarge`]. Without a limit the
-    /// decoded size is bounded by what the file's zstd frames can expand to
-    /// ([`vlf_format::MAX_ZSTD_EXPANSION`] times their size), and an allocation that fails is
-    /// [`FormatError::OutOfMemory`], not an abort. Raw fields are not affected.
+    /// is allocated) exceeds `bytes`, with [`FormatError::UnpackedTooLarge`]. Raw fields are not
+    /// affected.
+    ///
+    /// Without this call the limit is [`memory::budget`], read when a packed field is opened:
+    /// three quarters of the memory the system reports available, or what the address-space limit
+    /// leaves. A few hundred kilobytes of zstd frames can claim gigabytes (up to
+    /// [`vlf_format::MAX_ZSTD_EXPANSION`] times their size, the format's own bound), and a claim
+    /// the system could only meet by swapping or by killing the process is refused instead.
+    /// Where the system reports neither (not Linux), only the format's bound applies. To decode
+    /// more, pass a larger limit (`u64::MAX`: the format's bound alone); an allocation that fails
+    /// is then [`FormatError::OutOfMemory`], not an abort. `vlf-bake unpack` decodes to a file
+    /// instead, in bounded memory.
     pub fn max_unpacked_bytes(&mut self, bytes: u64) -> &mut OpenOptions {
         self.max_unpacked_bytes = Some(bytes);
         self
     }
 
-    /// The limit set by [`OpenOptions::max_unpacked_bytes`], if any: for a caller that opens
-    /// several fields and holds them to one budget together.
+    /// The limit set by [`OpenOptions::max_unpacked_bytes`], if any (`None`: the default, the
+    /// memory budget when each field is opened): for a caller that opens several fields and holds
+    /// them to one budget together.
     pub fn unpacked_limit(&self) -> Option<u64> {
         self.max_unpacked_bytes
     }
@@ -303,10 +314,17 @@ impl OpenOptions {
     fn unpack_if_packed(&self, bytes: &[u8]) -> Result<Option<Unpacked>, FormatError> {
         match vlf_format::parse_head(bytes, bytes.len() as u64) {
             Ok((_, table)) if vlf_format::pack::is_packed(&table) => {
-                vlf_format::pack::unpack_in_memory(bytes, self.max_unpacked_bytes).map(Some)
+                vlf_format::pack::unpack_in_memory(bytes, self.decode_limit()).map(Some)
             }
             _ => Ok(None),
         }
+    }
+
+    /// The most bytes a packed field may be decoded into: the caller's limit, else the memory
+    /// budget where the system reports one.
+    #[cfg(feature = "packed")]
+    fn decode_limit(&self) -> Option<u64> {
+        self.max_unpacked_bytes.or_else(|| Some(memory::budget()).filter(|b| b.is_reported()).map(|b| b.bytes))
     }
 
     /// Without the `packed` feature nothing is decoded: the reader refuses a compressed section

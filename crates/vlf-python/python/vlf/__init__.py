@@ -191,7 +191,8 @@ class Field:
     def open(cls, path: PathLike, *, max_unpacked_bytes: Optional[int] = None) -> "Field":
         """Opens the field file at ``path`` by memory-mapping it: the header, the section table
         and the content hash are checked, nothing else is read. A packed field is decoded into
-        memory (refused over ``max_unpacked_bytes``). Raises ``FileNotFoundError`` (or another
+        memory, refused over ``max_unpacked_bytes`` (by default, three quarters of the memory the
+        system reports available, or what ``ulimit -v`` leaves). Raises ``FileNotFoundError`` (or another
         ``OSError``) if the file cannot be read and :class:`FieldError` if it is not a valid
         field."""
         return cls(_vlf.Field.open(os.fsdecode(path), max_unpacked_bytes))
