@@ -85,8 +85,7 @@ impl Measure for Prepared<'_> {
 
     fn coverage(&self, params: &Params) -> Coverage {
         let directions = Lattice::new(params.lattice_n).direction_count() as u32;
-        let floor = EntryFloor::measure(self, &params.grid(self.radius), 0..directions);
-        Coverage { at_least: floor.total, per_direction: floor.mean, largest: floor.largest }
+        EntryFloor::measure(self, &params.grid(self.radius), 0..directions).coverage
     }
 }
 

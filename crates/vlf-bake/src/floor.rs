@@ -28,38 +28,29 @@ pub const MAX_PAIRS: u64 = 1 << 26;
 pub struct EntryFloor {
     /// The directions covered.
     pub directions: Range<u32>,
-    /// At least this many entries in all of them.
-    pub total: u64,
-    /// At least this many in the direction that makes the most (the largest bound measured).
-    pub largest: u64,
-    /// The mean of the bounds of the directions measured (one per triangle if none was): the
-    /// estimate for a direction that was not.
-    pub mean: f64,
+    /// What they make at least.
+    pub coverage: Coverage,
 }
 
 impl EntryFloor {
     /// One entry per triangle in each direction: the floor where no direction is measured.
     pub fn per_triangle(triangles: u64, directions: Range<u32>) -> EntryFloor {
-        let count = directions.len() as u64;
-        EntryFloor { directions, total: count.saturating_mul(triangles), largest: triangles, mean: triangles as f64 }
+        let coverage = Coverage::one_each(triangles, directions.len() as u64);
+        EntryFloor { directions, coverage }
     }
 
     /// The floor of all `directions` of a field, from the coverage its parameters were chosen with
     /// ([`Choice::coverage`](crate::params::Choice::coverage), which a prepared scene measures
-    /// with [`EntryFloor::measure`]): the same figures, not measured again.
-    pub fn of_field(coverage: &Coverage, directions: u32) -> EntryFloor {
-        EntryFloor {
-            directions: 0..directions,
-            total: coverage.at_least,
-            largest: coverage.largest,
-            mean: coverage.per_direction,
-        }
+    /// with [`EntryFloor::measure`]): not measured again.
+    pub fn of_field(coverage: Coverage, directions: u32) -> EntryFloor {
+        EntryFloor { directions: 0..directions, coverage }
     }
 
     /// At least how many bytes a field (or shard) of these directions on `tiles`² tiles over
     /// `triangles` triangles takes: [`size::lower_bound_with_refs`], a ref for each entry.
     pub fn bytes_at_least(&self, tiles: u32, triangles: u64) -> u64 {
-        size::lower_bound_with_refs(self.directions.len() as u64, tiles as u64 * tiles as u64, triangles, self.total)
+        let (directions, tiles) = (self.directions.len() as u64, tiles as u64 * tiles as u64);
+        size::lower_bound_with_refs(directions, tiles, triangles, self.coverage.at_least)
     }
 
     /// The floor of `directions` of the field on `grid` over `prep`, measured on as many of them
@@ -84,9 +75,10 @@ impl EntryFloor {
         let areas = Areas::new(&prep.vertices, &prep.triangles);
         let bounds: Vec<u64> = rotations.par_iter().map(|m| areas.entries_at_least(grid, m)).collect();
         // Each measured direction adds what it makes beyond the one entry per triangle counted.
-        floor.total = floor.total.saturating_add(bounds.iter().map(|b| b - triangles).sum());
-        floor.largest = bounds.iter().copied().max().unwrap_or(triangles);
-        floor.mean = bounds.iter().sum::<u64>() as f64 / measured as f64;
+        let c = &mut floor.coverage;
+        c.at_least = c.at_least.saturating_add(bounds.iter().map(|b| b - triangles).sum());
+        c.largest = bounds.iter().copied().max().unwrap_or(triangles);
+        c.per_direction = bounds.iter().sum::<u64>() as f64 / measured as f64;
         floor
     }
 }
@@ -94,8 +86,8 @@ impl EntryFloor {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::params::{DepthPolicy, Params};
     use crate::scene::Scene;
+    use vlf_raster::DepthPolicy;
     use vlf_raster::MAX_WORDS;
 
     /// A grid of `side`² unit squares (two triangles each) in the plane z = x / 2.
@@ -118,8 +110,7 @@ mod tests {
     fn the_floor_is_at_most_what_the_directions_make_and_counts_fine_tiles() {
         let scene = sheet(12);
         let prep = Prepared::new(&scene);
-        let params = Params { lattice_n: 3, tiles: 64, depth: DepthPolicy::default(), margin: 1e-6 };
-        let grid = params.grid(prep.radius);
+        let grid = Grid { tiles: 64, lattice_n: 3, radius: prep.radius, margin: 1e-6, depth: DepthPolicy::default() };
         let lattice = Lattice::new(3).directions();
         let made: Vec<u64> = lattice
             .iter()
@@ -133,19 +124,19 @@ mod tests {
             })
             .collect();
         let all = EntryFloor::measure(&prep, &grid, 0..lattice.len() as u32);
-        assert!(all.total <= made.iter().sum::<u64>(), "{all:?} against {made:?}");
-        assert!(all.largest <= *made.iter().max().unwrap());
+        assert!(all.coverage.at_least <= made.iter().sum::<u64>(), "{all:?} against {made:?}");
+        assert!(all.coverage.largest <= *made.iter().max().unwrap());
         // The sheet is 12 × 12 × √1.25 ≈ 161 square units across a grid 2R ≈ 19 wide: on 64² tiles
         // each of its 288 triangles covers several of them in most directions.
         let triangles = prep.triangle_count() as u64;
-        assert!(all.total > 2 * triangles * lattice.len() as u64, "{all:?}");
+        assert!(all.coverage.at_least > 2 * triangles * lattice.len() as u64, "{all:?}");
         // A shard's floor covers its directions only, and the floors of a partition add up.
         let (a, b) = (EntryFloor::measure(&prep, &grid, 0..7), EntryFloor::measure(&prep, &grid, 7..19));
-        assert_eq!(a.total + b.total, all.total);
-        assert_eq!(a.largest.max(b.largest), all.largest);
+        assert_eq!(a.coverage.at_least + b.coverage.at_least, all.coverage.at_least);
+        assert_eq!(a.coverage.largest.max(b.coverage.largest), all.coverage.largest);
         // Bytes: the format's lower bound, plus a ref for each entry beyond one per triangle.
         let plain = size::lower_bound(19, 64 * 64, triangles);
-        assert_eq!(all.bytes_at_least(64, triangles), plain + (all.total - 19 * triangles) * size::REF);
+        assert_eq!(all.bytes_at_least(64, triangles), plain + (all.coverage.at_least - 19 * triangles) * size::REF);
         assert_eq!(EntryFloor::per_triangle(triangles, 0..19).bytes_at_least(64, triangles), plain);
     }
 }

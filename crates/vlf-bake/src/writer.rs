@@ -191,12 +191,18 @@ pub fn write_into(
     // The room the bake needs, before any work: memory for its directions, disk for its output.
     // A field's floor was measured when its parameters were chosen; a shard's covers its own.
     let floor = if range.len() == direction_count as usize {
-        EntryFloor::of_field(&choice.coverage, direction_count)
+        EntryFloor::of_field(choice.coverage, direction_count)
     } else {
         EntryFloor::measure(prep, &params.grid(prep.radius), range.clone())
     };
     let tables = crate::sections::parameter_bytes(params.lattice_n) + range.len() as u64 * size::BEAM;
-    crate::memory::check(params.tiles, rayon::current_num_threads(), range.len() as u64, floor.largest, tables)?;
+    crate::memory::check(
+        params.tiles,
+        rayon::current_num_threads(),
+        range.len() as u64,
+        floor.coverage.largest,
+        tables,
+    )?;
     let what = if shard.is_some() { "shard" } else { "field" };
     crate::disk::check(path, what, Need::of(choice, prep.triangle_count() as u64, &floor))?;
 

@@ -294,23 +294,26 @@ pub trait Measure {
     fn coverage(&self, params: &Params) -> Coverage;
 }
 
-/// What [`Measure::coverage`] tells of a field's triangle-tile pairs.
+/// What some directions' entries (triangle-tile pairs) come to, at least: what
+/// [`crate::floor::EntryFloor::measure`] finds, and what the parameter choice is told of a
+/// candidate ([`Measure::coverage`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Coverage {
-    /// At least this many in all directions: explicit parameters are held to `--max-bytes` by it.
+    /// At least this many in all the directions: explicit parameters are held to `--max-bytes`
+    /// by it.
     pub at_least: u64,
-    /// About this many in a direction: candidates of automatic parameters whose pairs alone
-    /// would pass the budget are not baked to be measured (long thin triangles on fine tiles
-    /// make millions).
+    /// About this many in a direction: the mean of the bounds of the directions measured (one per
+    /// triangle if none was). Candidates of automatic parameters whose pairs alone would pass the
+    /// budget are not baked to be measured (long thin triangles on fine tiles make millions).
     pub per_direction: f64,
-    /// At least this many in the direction that makes the most: what the bake's memory check
-    /// counts.
+    /// At least this many in the direction that makes the most (the largest bound measured): what
+    /// the bake's memory check counts.
     pub largest: u64,
 }
 
 impl Coverage {
     /// One pair per triangle in each of `directions` directions: what the format's lower bound
-    /// counts.
+    /// counts, and the floor where no direction is measured.
     pub fn one_each(triangles: u64, directions: u64) -> Coverage {
         Coverage { at_least: triangles.saturating_mul(directions), per_direction: triangles as f64, largest: triangles }
     }
