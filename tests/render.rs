@@ -217,3 +217,40 @@ fn a_small_scene_far_from_the_origin_renders_as_it_does_at_the_origin() {
     assert_eq!(differing, 0, "{differing} pixels differ between the scene at x = 1e9 and at the origin");
     assert_eq!(far.rays, near.rays);
 }
+
+/// The same for a scene of instances (`render --scene`): two instances of the small scene's field
+/// moved to x = 10⁹ are drawn as they are at the origin, `Flat` tracing relative to the centre of
+/// the scene's content. With world-space f32 rays (`Flat` before it did so) they were not.
+#[test]
+fn a_scene_of_instances_far_from_the_origin_renders_as_it_does_at_the_origin() {
+    let dir = tempfile::tempdir().unwrap();
+    let field = std::sync::Arc::new(small_scene_at(dir.path(), "instanced", [0.0; 3]));
+    let settings = Settings { background: vlf_render::Background::Solid([0.0; 3]), ..settings() };
+    let picture = |x: f64| {
+        let mut scene = vlf_scene::Scene::new();
+        let f = scene.add_field(field.clone());
+        for dx in [0.0, 0.75] {
+            scene.add_instance(f, vlf_scene::Affine::translation([x + dx, 0.0, 0.0]), u32::MAX).unwrap();
+        }
+        let flat = scene.flat().unwrap();
+        assert_eq!(flat.origin()[0], x + 0.375, "the centre of the content");
+        let shading = Scene::from_instances(&scene, &flat, &SceneOptions::default());
+        let p = |a: f64, b: f64, c: f64| [x + a, b, c];
+        let view =
+            View::look_at(p(0.9, 0.75, 1.5), p(0.375, 0.125, 0.0), [0.0, 1.0, 0.0], 45.0, WIDTH as f64 / HEIGHT as f64);
+        let lights = [Light::point(p(0.5, 2.0, 1.0), 4.0)];
+        render(&flat, &shading, &view, &lights, &settings, &|_| {})
+    };
+    let (near, far) = (picture(0.0), picture(1e9));
+    let drawn = |f: &Frame| f.color.iter().filter(|c| c.iter().any(|&v| v > 0.0)).count();
+    let pixels = (WIDTH * HEIGHT) as usize;
+    assert!(drawn(&near) > pixels / 4, "the scene at the origin fills {} of {pixels} pixels", drawn(&near));
+    assert!(near.rays.shadow > 0, "{:?}", near.rays);
+    assert_eq!(drawn(&far), drawn(&near), "pixels drawn at x = 1e9 and at the origin");
+    // The shading scene is made from world triangles (f64, whose steps at 10⁹ are 1.2e-7) made
+    // relative to the centre again, so the shading may differ in the last bits; the hits may not.
+    let largest = far.color.iter().zip(&near.color).flat_map(|(a, b)| (0..3).map(move |k| (a[k] - b[k]).abs()));
+    let largest = largest.fold(0.0f32, f32::max);
+    assert!(largest < 1e-4, "colours differ by up to {largest} between the scene at x = 1e9 and at the origin");
+    assert_eq!(far.rays, near.rays);
+}

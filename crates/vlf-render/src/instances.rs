@@ -15,7 +15,8 @@ impl Scene {
     /// world triangle `flat.resolve(k)` names (a removed one is left degenerate: it is never hit),
     /// with its field's material, or the default surface for inserted triangles.
     pub fn from_instances(instances: &Instances, flat: &Flat<'_>, options: &SceneOptions) -> Scene {
-        let (lo, hi) = instances.bounds();
+        // The centre is the one `Flat` traces relative to, so hit points need no shift.
+        let (lo, hi) = instances.content_bounds();
         let (center, radius) = if (0..3).all(|k| lo[k] <= hi[k]) {
             let c: [f64; 3] = std::array::from_fn(|k| 0.5 * (lo[k] + hi[k]));
             (c, (0..3).map(|k| (hi[k] - lo[k]).powi(2)).sum::<f64>().sqrt() / 2.0)

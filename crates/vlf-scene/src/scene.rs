@@ -85,15 +85,20 @@ pub struct Scene {
     bvh: Bvh,
 }
 
-/// The box of `field`'s live triangles moved by `transform`, grown by a relative 2⁻²⁰ so that
-/// the rounding of the transformed ray can never take a hit outside it.
-fn world_box(field: &EditedField, transform: &Affine) -> Aabb {
+/// The box of `field`'s live triangles moved by `transform`, or `None` if it has none.
+fn content_box(field: &EditedField, transform: &Affine) -> Option<([f64; 3], [f64; 3])> {
     let (lo, hi) = field.bounds_local();
     if !(0..3).all(|k| lo[k] <= hi[k]) {
-        return Aabb::EMPTY;
+        return None;
     }
     let c = field.field().origin();
-    let (lo, hi) = transform.bounds(std::array::from_fn(|k| lo[k] + c[k]), std::array::from_fn(|k| hi[k] + c[k]));
+    Some(transform.bounds(std::array::from_fn(|k| lo[k] + c[k]), std::array::from_fn(|k| hi[k] + c[k])))
+}
+
+/// [`content_box`] grown by a relative 2⁻²⁰ so that the rounding of the transformed ray can
+/// never take a hit outside it: the box the hierarchy holds.
+fn world_box(field: &EditedField, transform: &Affine) -> Aabb {
+    let Some((lo, hi)) = content_box(field, transform) else { return Aabb::EMPTY };
     let size = (0..3).map(|k| (hi[k] - lo[k]) + lo[k].abs().max(hi[k].abs())).fold(0.0, f64::max);
     let grow = size * (1.0 / (1u64 << 20) as f64);
     Aabb { lo: lo.map(|v| v - grow), hi: hi.map(|v| v + grow) }
@@ -112,8 +117,10 @@ impl Instance {
 
     /// The world ray in the field's coordinates relative to its centre, on `[tmin, tmax]`.
     #[inline]
-    fn local_ray(&self, ray: &Ray, tmax: f32) -> Ray {
-        let o = self.to_local.point(ray.org.map(f64::from)).map(|v| v as f32);
+    /// The ray whose world origin is `org` (in f64) and whose direction and `tmin` are `ray`'s,
+    /// in this instance's field relative to its centre: mapped in f64, then rounded to f32.
+    fn local_ray(&self, org: [f64; 3], ray: &Ray, tmax: f32) -> Ray {
+        let o = self.to_local.point(org).map(|v| v as f32);
         let d = self.to_local.vector(ray.dir.map(f64::from)).map(|v| v as f32);
         Ray { org: o, tmin: ray.tmin, dir: d, tmax }
     }
@@ -287,6 +294,21 @@ impl Scene {
         (b.lo, b.hi)
     }
 
+    /// The box of every instance's live triangles in world coordinates, not grown as the
+    /// hierarchy's boxes are ([`Scene::bounds`]): what a camera frames. Empty (`lo > hi`) if
+    /// there are none. Time linear in the instances.
+    pub fn content_bounds(&self) -> ([f64; 3], [f64; 3]) {
+        let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+        for i in self.instances.iter().flatten() {
+            if let Some((l, h)) = content_box(&self.fields[i.field.0 as usize], &i.transform) {
+                for k in 0..3 {
+                    (lo[k], hi[k]) = (lo[k].min(l[k]), hi[k].max(h[k]));
+                }
+            }
+        }
+        (lo, hi)
+    }
+
     /// The box around instance `id`'s live triangles in world coordinates, as the hierarchy
     /// holds it (grown by a relative 2⁻²⁰), or `None` if there is no such instance.
     pub fn instance_bounds(&self, id: InstanceId) -> Option<([f64; 3], [f64; 3])> {
@@ -310,7 +332,7 @@ impl Scene {
     /// or `None` if there is no such instance. With [`EditedField::triangle_local`], a brute
     /// force over one instance that agrees with the scene bit for bit.
     pub fn local_ray(&self, id: InstanceId, ray: &Ray) -> Option<Ray> {
-        Some(self.instances.get(id as usize)?.as_ref()?.local_ray(ray, ray.tmax))
+        Some(self.instances.get(id as usize)?.as_ref()?.local_ray(ray.org.map(f64::from), ray, ray.tmax))
     }
 
     /// The closest hit of `ray` on `[tmin, tmax]` among the instances whose mask shares a bit
@@ -328,10 +350,25 @@ impl Scene {
     /// [`Scene::closest_hit`], counting the work: the hierarchy's nodes as cells, then each
     /// field's tiles, leaves and triangle tests (a ray counts once per instance it reaches).
     pub fn closest_hit_counted(&self, ray: &Ray, mask: u32, counter: &mut impl Counter) -> Option<SceneHit> {
+        self.closest_hit_from([0.0; 3], ray, mask, counter)
+    }
+
+    /// [`Scene::closest_hit_counted`] for a ray whose origin is given relative to `origin` (in
+    /// f64): the world ray starts at `origin + ray.org`. A scene far from the world's origin is
+    /// traced exactly this way (f32 world coordinates there are too coarse for its rays), as
+    /// [`Flat`] does for the renderer; `t` means what it means for the world ray.
+    pub fn closest_hit_from(
+        &self,
+        origin: [f64; 3],
+        ray: &Ray,
+        mask: u32,
+        counter: &mut impl Counter,
+    ) -> Option<SceneHit> {
         if !ray.is_valid() {
             return None;
         }
-        let br = BoxRay::new(ray.org.map(f64::from), ray.dir.map(f64::from), ray.tmin as f64);
+        let org: [f64; 3] = std::array::from_fn(|k| origin[k] + ray.org[k] as f64);
+        let br = BoxRay::new(org, ray.dir.map(f64::from), ray.tmin as f64);
         let tmax = Cell::new(ray.tmax);
         let mut best = None;
         self.bvh.traverse(
@@ -343,7 +380,7 @@ impl Scene {
                 if i.mask & mask == 0 {
                     return false;
                 }
-                let local = i.local_ray(ray, tmax.get());
+                let local = i.local_ray(org, ray, tmax.get());
                 if let Some(hit) = self.fields[i.field.0 as usize].closest_hit_local(&local, counter) {
                     tmax.set(hit.t);
                     best = Some(SceneHit { hit, instance: k });
@@ -356,10 +393,17 @@ impl Scene {
 
     /// [`Scene::any_hit`], returning the hit it found and counting the work.
     pub fn any_hit_counted(&self, ray: &Ray, mask: u32, counter: &mut impl Counter) -> Option<SceneHit> {
+        self.any_hit_from([0.0; 3], ray, mask, counter)
+    }
+
+    /// [`Scene::any_hit_counted`] for a ray whose origin is given relative to `origin`, as
+    /// [`Scene::closest_hit_from`].
+    pub fn any_hit_from(&self, origin: [f64; 3], ray: &Ray, mask: u32, counter: &mut impl Counter) -> Option<SceneHit> {
         if !ray.is_valid() {
             return None;
         }
-        let br = BoxRay::new(ray.org.map(f64::from), ray.dir.map(f64::from), ray.tmin as f64);
+        let org: [f64; 3] = std::array::from_fn(|k| origin[k] + ray.org[k] as f64);
+        let br = BoxRay::new(org, ray.dir.map(f64::from), ray.tmin as f64);
         let mut found = None;
         self.bvh.traverse(
             &br,
@@ -370,7 +414,7 @@ impl Scene {
                 if i.mask & mask == 0 {
                     return false;
                 }
-                let local = i.local_ray(ray, ray.tmax);
+                let local = i.local_ray(org, ray, ray.tmax);
                 found = self.fields[i.field.0 as usize]
                     .any_hit_local(&local, counter)
                     .map(|hit| SceneHit { hit, instance: k });
@@ -398,13 +442,18 @@ impl Scene {
         if next > u32::MAX as u64 {
             return Err(SceneError::TooManyTriangles);
         }
-        Ok(Flat { scene: self, starts, order, count: next as u32 })
+        let (lo, hi) = self.content_bounds();
+        let origin =
+            if (0..3).all(|k| lo[k] <= hi[k]) { std::array::from_fn(|k| 0.5 * (lo[k] + hi[k])) } else { [0.0; 3] };
+        Ok(Flat { scene: self, starts, order, count: next as u32, origin })
     }
 }
 
 /// A scene seen as one set of triangles numbered `0..count` ([`Scene::flat`]); it answers as a
 /// [`vlf_geom::Intersector`] over every instance (mask `0xFFFFFFFF`), a hit's `prim` being that
-/// number.
+/// number. Its origin ([`Intersector::origin`]) is the centre of the scene's content
+/// ([`Scene::content_bounds`]): rays given relative to it keep the precision of the scene's own
+/// size however far it lies from the world's origin.
 pub struct Flat<'a> {
     scene: &'a Scene,
     /// Per instance id, its first number (`u32::MAX` for a removed instance).
@@ -412,6 +461,9 @@ pub struct Flat<'a> {
     /// `(first number, instance)`, increasing.
     order: Vec<(u32, InstanceId)>,
     count: u32,
+    /// The centre of the scene's content: what rays are given relative to
+    /// ([`Intersector::origin`]).
+    origin: [f64; 3],
 }
 
 impl Flat<'_> {
@@ -449,6 +501,15 @@ impl Intersector for Flat<'_> {
     }
     fn any_hit_counted(&self, ray: &Ray, work: &mut TraceStats) -> Option<Hit> {
         self.scene.any_hit_counted(ray, u32::MAX, work).map(|h| self.record(h))
+    }
+    fn origin(&self) -> [f64; 3] {
+        self.origin
+    }
+    fn closest_hit_local_counted(&self, ray: &Ray, work: &mut TraceStats) -> Option<Hit> {
+        self.scene.closest_hit_from(self.origin, ray, u32::MAX, work).map(|h| self.record(h))
+    }
+    fn any_hit_local_counted(&self, ray: &Ray, work: &mut TraceStats) -> Option<Hit> {
+        self.scene.any_hit_from(self.origin, ray, u32::MAX, work).map(|h| self.record(h))
     }
 }
 

@@ -106,7 +106,7 @@ pub fn render(a: &RenderArgs) -> Result<()> {
         let (lo, hi) = scene.instance_bounds(id).unwrap_or(([0.0; 3], [0.0; 3]));
         starts.push((id, info.transform, std::array::from_fn::<f64, 3, _>(|k| 0.5 * (lo[k] + hi[k]))));
     }
-    let (lo, hi) = scene.bounds();
+    let (lo, hi) = scene.content_bounds();
     if !(0..3).all(|k| lo[k] <= hi[k]) {
         bail!("scene file {} has no triangles to render", path.display());
     }
@@ -124,17 +124,14 @@ pub fn render(a: &RenderArgs) -> Result<()> {
     let (mut min, mut max) = (lo, hi);
     for k in 0..frames {
         place(&mut scene, k)?;
-        let (l, h) = scene.bounds();
+        let (l, h) = scene.content_bounds();
         for i in 0..3 {
             (min[i], max[i]) = (min[i].min(l[i]), max[i].max(h[i]));
         }
     }
+    // Rays are traced relative to the centre of each frame's scene (`Flat`'s origin), so a small
+    // scene far from the world's origin renders as it would at the origin.
     let bounds = SceneBounds::of_box(min, max);
-    // A scene of instances is traced with world rays (`Flat`'s origin is the world's), which
-    // cannot resolve a small scene far away; a field alone is traced relative to its centre.
-    if let Some(warning) = bounds.f32_warning() {
-        eprintln!("warning: {}: {warning}", path.display());
-    }
     let s = setup(a, &[], &[], &bounds, &path.display().to_string(), frames)?;
     let options = SceneOptions { smooth: !a.flat, ..SceneOptions::default() };
     check_flattened(&scene, path, options.smooth)?;
